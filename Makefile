@@ -1,0 +1,38 @@
+# ScourSPH: the two commands a new user runs are `make run` and `make test`.
+PYTHON ?= python3.11
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+SCENE  ?= scenes/dam_break_2d.toml
+OUT    ?= runs/dam_break_2d
+
+.PHONY: run test bench verify references clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+## make run: set up .venv and run the default scene (2D dam break)
+run: $(STAMP)
+	$(BIN)/scoursph run $(SCENE) --out $(OUT)
+
+## make test: set up .venv and run the test suite
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+## make bench: performance benchmarks (pytest-benchmark), results in .benchmarks/
+bench: $(STAMP)
+	$(BIN)/python -m pytest benchmarks -q --benchmark-only --benchmark-autosave -p no:cacheprovider -o addopts=""
+
+## make verify: every verification case at its default resolution
+verify: $(STAMP)
+	$(BIN)/scoursph verify all
+
+## make references: regenerate the OpenFOAM and LIGGGHTS reference data (long)
+references: $(STAMP)
+	$(BIN)/python -m reference_cases.run_all
+
+clean:
+	rm -rf runs .pytest_cache .benchmarks

@@ -1,0 +1,67 @@
+"""Material models and their parameters, flattened into per-material arrays for kernels.
+
+Each material gets an integer id (its order in the scene) and a phase: particles of one
+phase interact through that phase's terms (water-water: seed eqs. 6-11, 19, 22).
+Soil (issue 3) adds its own phase; soil-water coupling is a separate interaction term.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import Scene, Water
+
+PHASE_WATER = 0
+
+
+@dataclass(frozen=True)
+class MaterialTable:
+    """Per-material constants indexed by material id (what the Numba kernels read)."""
+
+    names: tuple[str, ...]
+    phase: np.ndarray          # int32
+    rho0: np.ndarray           # reference density (kg/m^3)
+    sound_speed: np.ndarray    # c (m/s)
+    eos_b: np.ndarray          # B = rho0 c^2 / lambda, seed eq. (9)
+    eos_exponent: np.ndarray   # lambda
+    viscosity: np.ndarray      # dynamic viscosity mu (Pa s), seed eq. (10)
+    av_alpha: np.ndarray       # Monaghan artificial viscosity, seed eq. (19)
+    av_beta: np.ndarray
+
+    def index(self, name):
+        return self.names.index(name)
+
+    def ids_of_phase(self, phase):
+        return [k for k in range(len(self.names)) if self.phase[k] == phase]
+
+
+def tait_pressure(rho, rho0, b, exponent):
+    """Seed eq. (9): p = B [(rho/rho0)^lambda - 1] (NumPy form, for set-up and tests)."""
+    return b * ((rho / rho0) ** exponent - 1.0)
+
+
+def tait_density(p, rho0, b, exponent):
+    """Inverse of eq. (9), used to start a water block in hydrostatic equilibrium."""
+    return rho0 * (1.0 + p / b) ** (1.0 / exponent)
+
+
+def build_material_table(scene: Scene) -> MaterialTable:
+    names = tuple(scene.materials)
+    n = len(names)
+    cols = {k: np.zeros(n) for k in ("rho0", "sound_speed", "eos_b", "eos_exponent", "viscosity", "av_alpha", "av_beta")}
+    phase = np.zeros(n, dtype=np.int32)
+    for k, name in enumerate(names):
+        mat = scene.materials[name]
+        if isinstance(mat, Water):
+            phase[k] = PHASE_WATER
+            c = mat.sound_speed
+            cols["rho0"][k] = mat.density
+            cols["sound_speed"][k] = c
+            cols["eos_exponent"][k] = mat.eos_exponent
+            cols["eos_b"][k] = mat.density * c * c / mat.eos_exponent  # B = rho0 c^2 / lambda (seed 2.1)
+            cols["viscosity"][k] = mat.viscosity
+        av = scene.artificial_viscosity(name)
+        cols["av_alpha"][k], cols["av_beta"][k] = av.alpha, av.beta
+    return MaterialTable(names=names, phase=phase, **cols)

@@ -1,0 +1,40 @@
+"""One interface for serial and MPI runs: the physics only ever sees this.
+
+The serial communicator is the identity; the MPI one (issue 4) implements the same
+methods with mpi4py reductions, halo exchange and migration.
+"""
+
+from __future__ import annotations
+
+
+class SerialCommunicator:
+    rank = 0
+    size = 1
+
+    def min(self, value):
+        return value
+
+    def max(self, value):
+        return value
+
+    def sum(self, value):
+        return value
+
+    def any(self, flag):
+        return bool(flag)
+
+    def barrier(self):
+        pass
+
+    def is_root(self):
+        return True
+
+    # Halo: a serial run has no ghosts.
+    def migrate(self, particles):
+        pass
+
+    def build_halo(self, particles, reach, fields):
+        particles.n_ghost = 0
+
+    def refresh_halo(self, particles, fields):
+        pass

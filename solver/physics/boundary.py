@@ -1,0 +1,137 @@
+"""Straight walls by symmetric image particles (Libersky et al. 1993; seed sec. 2.5).
+
+Every local particle within the list radius of a wall gets an image mirrored across it
+(and across both walls near a corner). An image is stored as its source row plus a sign
+and an offset per axis:  x' = s x + o,  v' = s v  (normal velocity reversed, tangential
+kept: free slip), and a tensor T'_ab = s_a s_b T_ab, which is seed eq. (23) for one wall
+(diagonal kept, off-diagonal reversed) and its composition at a corner.
+Images are chosen when the neighbour lists are rebuilt and refreshed every step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from ..config import kernel
+
+
+def wall_planes(scene):
+    """Per axis: (has lower wall, lower plane, has upper wall, upper plane)."""
+    dim = scene.dim
+    has_lo = np.zeros(dim, dtype=np.bool_)
+    has_hi = np.zeros(dim, dtype=np.bool_)
+    for a, axis in enumerate("xyz"[:dim]):
+        has_lo[a] = getattr(scene.walls, f"{axis}_min") is not None
+        has_hi[a] = getattr(scene.walls, f"{axis}_max") is not None
+    return has_lo, np.asarray(scene.domain.min, float), has_hi, np.asarray(scene.domain.max, float)
+
+
+@kernel
+def _image_choices(xi, reach, has_lo, lo, has_hi, hi, choice):
+    """choice[a] = 0 (no mirror), 1 (mirror at lower wall) or 2 (upper); returns count of mirrored axes."""
+    k = 0
+    for a in range(xi.shape[0]):
+        choice[a] = 0
+        if has_lo[a] and xi[a] - lo[a] < reach:
+            choice[a] = 1
+            k += 1
+        elif has_hi[a] and hi[a] - xi[a] < reach:
+            choice[a] = 2
+            k += 1
+    return k
+
+
+@kernel
+def find_images(x, n_local, reach, has_lo, lo, has_hi, hi, src, sign, offset):
+    """Fill image tables; returns the number of images (call with big enough arrays, or
+    with zero-length ones to count)."""
+    dim = x.shape[1]
+    choice = np.zeros(dim, dtype=np.int64)
+    n = 0
+    cap = src.shape[0]
+    for i in range(n_local):
+        k = _image_choices(x[i], reach, has_lo, lo, has_hi, hi, choice)
+        if k == 0:
+            continue
+        # every non-empty subset of the mirrored axes gives one image (corner: 3 images)
+        for mask in range(1, 1 << dim):
+            ok = True
+            for a in range(dim):
+                if (mask >> a) & 1 and choice[a] == 0:
+                    ok = False
+            if not ok:
+                continue
+            if n < cap:
+                src[n] = i
+                for a in range(dim):
+                    if (mask >> a) & 1:
+                        sign[n, a] = -1.0
+                        offset[n, a] = 2.0 * (lo[a] if choice[a] == 1 else hi[a])
+                    else:
+                        sign[n, a] = 1.0
+                        offset[n, a] = 0.0
+            n += 1
+    return n
+
+
+@kernel(parallel=True)
+def refresh_image_vectors(first, src, sign, offset, x, v):
+    """Image positions and velocities from their sources (free slip)."""
+    dim = x.shape[1]
+    for k in prange(src.shape[0]):
+        i = first + k
+        j = src[k]
+        for a in range(dim):
+            x[i, a] = sign[k, a] * x[j, a] + offset[k, a]
+            v[i, a] = sign[k, a] * v[j, a]
+
+
+@kernel(parallel=True)
+def refresh_image_scalar(first, src, field):
+    for k in prange(src.shape[0]):
+        field[first + k] = field[src[k]]
+
+
+@kernel(parallel=True)
+def refresh_image_tensor(first, src, sign, tensor):
+    """T'_ab = s_a s_b T_ab (seed eq. 23); tensors stored row-major as dim*dim components."""
+    dim = sign.shape[1]
+    for k in prange(src.shape[0]):
+        i = first + k
+        j = src[k]
+        for a in range(dim):
+            for b in range(dim):
+                tensor[i, a * dim + b] = sign[k, a] * sign[k, b] * tensor[j, a * dim + b]
+
+
+class ImageWalls:
+    """The walls of the box, and the current table of image particles."""
+
+    def __init__(self, scene, reach):
+        self.has_lo, self.lo, self.has_hi, self.hi = wall_planes(scene)
+        self.reach = reach
+        dim = scene.dim
+        self.src = np.zeros(0, dtype=np.int64)
+        self.sign = np.zeros((0, dim))
+        self.offset = np.zeros((0, dim))
+        self.any = bool(self.has_lo.any() or self.has_hi.any())
+
+    def rebuild(self, particles):
+        """Choose images of all local rows; appends them after the local rows."""
+        x, n_local = particles["x"], particles.n_local
+        args = (x, n_local, self.reach, self.has_lo, self.lo, self.has_hi, self.hi)
+        n = find_images(*args, self.src[:0], self.sign[:0], self.offset[:0]) if self.any else 0
+        if n > len(self.src):
+            m = int(n * 1.25) + 16
+            self.src = np.zeros(m, dtype=np.int64)
+            self.sign = np.zeros((m, particles.dim))
+            self.offset = np.zeros((m, particles.dim))
+        if n:
+            find_images(*args, self.src, self.sign, self.offset)
+        self.n = n
+        particles.ensure_capacity(n_local + n)
+        particles.n_image = n
+
+    def tables(self):
+        return self.src[: self.n], self.sign[: self.n], self.offset[: self.n]

@@ -1,0 +1,321 @@
+"""Parse and validate a scene file (TOML): the single source of a run's set-up.
+
+The scene is deep-merged over `defaults.toml`, then validated by the pydantic models
+below. Unknown keys are refused. Every error names the file, the dotted key and the
+reason, so the CLI can print it and exit with status 2 before anything is written.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import SceneError
+
+DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+WallKind = Literal["free_slip"]
+OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SceneInfo(Strict):
+    name: str
+    description: str = ""
+    dimension: Literal[1, 2, 3]
+    spacing: Positive
+    end_time: Positive
+    gravity: list[float]
+
+
+class Domain(Strict):
+    min: list[float]
+    max: list[float]
+
+
+class Walls(Strict):
+    x_min: WallKind | None = None
+    x_max: WallKind | None = None
+    y_min: WallKind | None = None
+    y_max: WallKind | None = None
+    z_min: WallKind | None = None
+    z_max: WallKind | None = None
+
+
+class Water(Strict):
+    """Weakly compressible Newtonian water: Tait EOS (9), stress (8), (10)-(11)."""
+
+    model: Literal["water"]
+    density: Positive
+    viscosity: NonNegative
+    typical_velocity: Positive
+    sound_speed_factor: Positive
+    eos_exponent: Positive
+
+    @property
+    def sound_speed(self):
+        return self.sound_speed_factor * self.typical_velocity  # c = 10 v_typ (seed 2.1)
+
+
+Material = Annotated[Union[Water], Field(discriminator="model")]
+
+
+class RectangleBlock(Strict):
+    name: str
+    material: str
+    shape: Literal["rectangle"]
+    min: list[float]
+    max: list[float]
+    hydrostatic: bool = False
+
+
+class PolygonBlock(Strict):
+    name: str
+    material: str
+    shape: Literal["polygon"]
+    vertices: list[list[float]]
+    hydrostatic: bool = False
+
+
+Block = Annotated[Union[RectangleBlock, PolygonBlock], Field(discriminator="shape")]
+
+
+class ArtificialViscosity(Strict):
+    alpha: NonNegative
+    beta: NonNegative
+
+
+class Cfl(Strict):
+    sound: Positive
+    force: Positive
+    viscous: Positive
+    collapse_fraction: Positive
+
+
+class Numerics(Strict):
+    kernel: Literal["cubic_spline"]
+    h_over_dx: Annotated[float, Field(ge=1.0, le=2.0)]
+    viscous_stress: bool
+    xsph_epsilon: Annotated[float, Field(ge=0.0, le=1.0)]
+    neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
+    cfl: Cfl
+    artificial_viscosity: dict[str, ArtificialViscosity] = {}
+
+
+class Output(Strict):
+    interval: Positive
+    times: list[float] | None = None
+    fields: list[Literal[OUTPUT_FIELDS]]
+    vtk: bool
+    render: bool
+    render_field: str
+
+
+class Scene(Strict):
+    scene: SceneInfo
+    domain: Domain
+    walls: Walls
+    materials: dict[str, Material]
+    blocks: list[Block]
+    numerics: Numerics
+    output: Output
+    material_defaults: dict[str, dict] = {}
+    artificial_viscosity_defaults: dict[str, ArtificialViscosity] = {}
+
+    @property
+    def dim(self):
+        return self.scene.dimension
+
+    @property
+    def h(self):
+        return self.numerics.h_over_dx * self.scene.spacing
+
+    def output_times(self):
+        if self.output.times is not None:
+            return np.asarray(sorted(self.output.times), dtype=float)
+        n = int(np.floor(self.scene.end_time / self.output.interval + 1e-9))
+        times = self.output.interval * np.arange(0, n + 1)
+        if times[-1] < self.scene.end_time * (1 - 1e-12):
+            times = np.append(times, self.scene.end_time)
+        return times
+
+    def artificial_viscosity(self, material_name):
+        return self.numerics.artificial_viscosity[material_name]
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        _check_consistency(self)
+        return self
+
+
+class _Inconsistent(ValueError):
+    def __init__(self, key, reason):
+        self.key = key
+        super().__init__(reason)
+
+
+def _check_consistency(s: Scene):
+    """Checks that span several keys; each raises with the key a user must edit."""
+    dim, dx = s.dim, s.scene.spacing
+    for key, vec in (("scene.gravity", s.scene.gravity), ("domain.min", s.domain.min), ("domain.max", s.domain.max)):
+        if len(vec) != dim:
+            raise _Inconsistent(key, f"needs {dim} components for a {dim}D scene, got {len(vec)}")
+    lo, hi = np.array(s.domain.min), np.array(s.domain.max)
+    if np.any(hi <= lo):
+        raise _Inconsistent("domain.max", "must be greater than domain.min in every direction")
+    reach = 2.0 * s.h * (1.0 + s.numerics.neighbour_skin / 2.0)
+    if np.any(hi - lo < 2.0 * reach):
+        raise _Inconsistent("domain", f"must be at least {2 * reach:.4g} m wide in every direction (two kernel supports)")
+    for axis in "xyz"[dim:]:
+        for side in ("min", "max"):
+            if getattr(s.walls, f"{axis}_{side}") is not None:
+                raise _Inconsistent(f"walls.{axis}_{side}", f"no {axis} axis in a {dim}D scene")
+    if not s.materials:
+        raise _Inconsistent("materials", "at least one material is needed")
+    if not s.blocks:
+        raise _Inconsistent("blocks", "at least one particle block is needed")
+    eps = 1e-9 * float(np.max(hi - lo))
+    for k, block in enumerate(s.blocks):
+        key = f"blocks[{k}]"
+        if block.material not in s.materials:
+            raise _Inconsistent(f"{key}.material", f"unknown material '{block.material}' (known: {', '.join(s.materials)})")
+        if isinstance(block, RectangleBlock):
+            bmin, bmax = np.array(block.min, float), np.array(block.max, float)
+            if len(bmin) != dim or len(bmax) != dim:
+                raise _Inconsistent(f"{key}.min", f"needs {dim} components")
+            if np.any(bmax <= bmin):
+                raise _Inconsistent(f"{key}.max", "must be greater than min in every direction")
+            corners = np.array([bmin, bmax])
+        else:
+            if dim != 2:
+                raise _Inconsistent(f"{key}.shape", "polygons are 2D only")
+            corners = np.array(block.vertices, float)
+            if corners.ndim != 2 or corners.shape[1] != 2 or len(corners) < 3:
+                raise _Inconsistent(f"{key}.vertices", "needs three or more [x, y] points")
+        if np.any(corners < lo - eps) or np.any(corners > hi + eps):
+            raise _Inconsistent(key, "lies (partly) outside the domain")
+        extent = corners.max(axis=0) - corners.min(axis=0)
+        if np.any(extent < dx):
+            raise _Inconsistent("scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)")
+    for name in s.numerics.artificial_viscosity:
+        if name not in s.materials:
+            raise _Inconsistent(f"numerics.artificial_viscosity.{name}", "no material of that name")
+    times = s.output_times()
+    if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
+        raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
+
+
+def deep_merge(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = deep_merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def _fill_material_defaults(raw: dict, defaults: dict) -> dict:
+    """Per-model defaults (viscosity, c factor, AV alpha/beta) filled in per material."""
+    raw = copy.deepcopy(raw)
+    av = raw.setdefault("numerics", {}).setdefault("artificial_viscosity", {})
+    for name, mat in (raw.get("materials") or {}).items():
+        if not isinstance(mat, dict):
+            continue
+        model = mat.get("model")
+        for key, value in defaults.get("material_defaults", {}).get(model, {}).items():
+            mat.setdefault(key, value)
+        if model in defaults.get("artificial_viscosity_defaults", {}):
+            av.setdefault(name, dict(defaults["artificial_viscosity_defaults"][model]))
+    return raw
+
+
+def _dotted(loc) -> str:
+    parts = []
+    for item in loc:
+        if isinstance(item, int):
+            parts.append(f"[{item}]")
+        elif item in ("water", "rectangle", "polygon") and parts:
+            continue  # pydantic's discriminator tag, not a key the user wrote
+        else:
+            parts.append(("." if parts else "") + str(item))
+    return "".join(parts) or "(top level)"
+
+
+def _reason(err) -> str:
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        return "unknown key (not in the scene schema)"
+    if kind == "missing":
+        return "missing value"
+    return err["msg"]
+
+
+def parse_scene(raw: dict, path="<scene>") -> Scene:
+    defaults = tomllib.loads(DEFAULTS_PATH.read_text())
+    merged = _fill_material_defaults(deep_merge(defaults, raw), defaults)
+    try:
+        return Scene.model_validate(merged)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        ctx_error = err.get("ctx", {}).get("error")
+        if isinstance(ctx_error, _Inconsistent):
+            raise SceneError(path, ctx_error.key, str(ctx_error)) from None
+        raise SceneError(path, _dotted(err["loc"]), _reason(err)) from None
+
+
+def load_scene(path) -> Scene:
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(path, "(file)", "no such scene file")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(path, "(syntax)", str(exc)) from None
+    return parse_scene(raw, path)
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """The merged scene as TOML text (saved next to every output)."""
+    return _to_toml(scene.model_dump(mode="json", exclude_none=True))
+
+
+def _toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(type(v))
+
+
+def _to_toml(d: dict, prefix="") -> str:
+    lines, tables, arrays = [], [], []
+    for k, v in d.items():
+        if isinstance(v, dict):
+            tables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            arrays.append((k, v))
+        else:
+            lines.append(f"{k} = {_toml_value(v)}")
+    out = "\n".join(lines) + ("\n" if lines else "")
+    for k, v in tables:
+        name = f"{prefix}{k}"
+        out += f"\n[{name}]\n" + _to_toml(v, name + ".")
+    for k, items in arrays:
+        for item in items:
+            out += f"\n[[{prefix}{k}]]\n" + _to_toml(item, f"{prefix}{k}.")
+    return out

@@ -1,0 +1,221 @@
+"""The step loop: predict, refresh halos and images, EOS, passes, time step, kick, drift.
+
+It knows nothing of MPI (the communicator does) and nothing of specific physics beyond
+calling the passes the plan lists.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import BlowUpError
+from .initial_state import create_particles
+from .integrate import (STATE_NOT_FINITE, STATE_OK, as_rows, lf_drift, lf_kick, lf_predict, max_norm2,
+                        state_status)
+from .kernels import SUPPORT_RADIUS, cubic_spline_normalisation
+from .materials import PHASE_WATER
+from .neighbors import CellGrid, CellList
+from .parallel.communicator import SerialCommunicator
+from .physics import fluid
+from .physics.boundary import ImageWalls, refresh_image_scalar, refresh_image_tensor, refresh_image_vectors
+from .plan import Plan, build_plan
+from .scene import Scene
+from .timestep import TimeStepper
+
+
+class Simulation:
+    def __init__(self, scene: Scene, comm=None, plan: Plan | None = None, particles=None):
+        self.scene = scene
+        self.comm = comm or SerialCommunicator()
+        self.plan = plan or build_plan(scene)
+        self.particles = particles if particles is not None else create_particles(scene, self.plan)
+        dim = scene.dim
+        self.h = scene.h
+        self.norm = cubic_spline_normalisation(dim, self.h)
+        self.skin = scene.numerics.neighbour_skin * self.h
+        self.radius = SUPPORT_RADIUS * self.h + self.skin      # Verlet list radius
+        self.lo = np.asarray(scene.domain.min, float)
+        self.hi = np.asarray(scene.domain.max, float)
+        self.gravity = np.asarray(scene.scene.gravity, float)
+        self.walls = ImageWalls(scene, reach=self.radius)
+        self.cells = CellList(CellGrid.covering(self.lo, self.hi, self.radius, pad=self.radius))
+        self.stepper = TimeStepper(self.plan.constraints, self.h, scene.numerics.cfl.force)
+        mats = self.plan.materials
+        self._phase_of_material = mats.phase
+        self.t = 0.0
+        self.step_count = 0
+        self.dt_prev = 0.0
+        self.dt_first = None
+        self.dt_limit = ""
+        self.rebuilds = 0
+        self.wall_reflections = 0          # specular reflections at walls (diagnostic, see lf_drift)
+        self.deepest_penetration = 0.0
+        self.lists = {}
+        self.rebuild()
+
+    # -- neighbour structures -------------------------------------------------------
+    def rebuild(self):
+        """Migrate, sort into cell order, rebuild halo, images and Verlet lists."""
+        ps = self.particles
+        self.comm.migrate(ps)
+        ps.drop_halo()
+        self.cells.bin(ps["x"], ps.n_owned)
+        ps.permute_owned(self.cells.owned_cell_order(ps.n_owned))
+        self.comm.build_halo(ps, self.radius, self.plan.halo_fields)
+        self.walls.rebuild(ps)
+        src, sign, offset = self.walls.tables()
+        first = ps.n_local
+        refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"])
+        for name in ("mass", "material", "rho"):
+            refresh_image_scalar(first, src, ps[name])
+        n = ps.n_total
+        self.cells.bin(ps["x"], n)
+        phase = self._phase_of_material[ps["material"][:n]].astype(np.int32)
+        owned_phase = phase[: ps.n_owned]
+        self.lists = {}
+        for p in self.plan.passes:
+            key = (p.targets, p.neighbours)
+            if key not in self.lists:
+                want = {"water": PHASE_WATER}
+                targets = np.flatnonzero(owned_phase == want[p.targets]).astype(np.int64)
+                self.lists[key] = self.cells.neighbour_list(ps["x"], targets, self.radius, phase, want[p.neighbours])
+        ps["x_ref"][: ps.n_owned] = ps["x"][: ps.n_owned]
+        self.rebuilds += 1
+
+    def refresh_images(self, vectors=(), scalars=(), tensors=()):
+        ps = self.particles
+        src, sign, offset = self.walls.tables()
+        if len(src) == 0:
+            return
+        first = ps.n_local
+        if vectors:
+            refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"])
+        for name in scalars:
+            refresh_image_scalar(first, src, ps[name])
+        for name in tensors:
+            refresh_image_tensor(first, src, sign, ps[name])
+
+    # -- rates ------------------------------------------------------------------------
+    def compute_rates(self):
+        ps, plan, mats = self.particles, self.plan, self.plan.materials
+        n = ps.n_owned
+        ps["acc"][:n] = self.gravity          # body force g in eq. (7)
+        ps["drho"][:n] = 0.0
+        self.comm.refresh_halo(ps, ("x", "v", "rho"))
+        self.refresh_images(vectors=plan.image_vectors, scalars=plan.image_scalars)
+        if "p" in ps:
+            fluid.tait_pressure(ps.n_total, ps["rho"], ps["material"], mats.rho0, mats.eos_b, mats.eos_exponent, ps["p"])
+        for p in plan.passes:
+            nl = self.lists[(p.targets, p.neighbours)]
+            getattr(self, "_pass_" + p.name)(nl)
+
+    def _pass_viscous_stress(self, nl):
+        ps = self.particles
+        fluid.viscous_stress(nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"],
+                             self.plan.materials.viscosity, self.h, self.norm, ps["tau"])
+        self.comm.refresh_halo(ps, ("tau",))
+        self.refresh_images(tensors=("tau",))
+
+    def _pass_fluid_rates(self, nl):
+        ps, mats, opt = self.particles, self.plan.materials, self.plan.options
+        fluid.fluid_rates(
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"], ps["material"],
+            mats.sound_speed, self.h, self.norm, ps["drho"], ps["acc"],
+            ps["tau"] if opt["viscous"] else None,
+            mats.av_alpha if opt["artificial_viscosity"] else None,
+            mats.av_beta if opt["artificial_viscosity"] else None,
+            ps["xsph"] if opt["xsph"] else None,
+            self.scene.numerics.xsph_epsilon,
+        )
+
+    # -- one step ---------------------------------------------------------------------
+    def predict(self):
+        """Values at the current time n from the half-step values (no-op before step 1)."""
+        if self.step_count == 0:
+            return
+        ps = self.particles
+        n = ps.n_owned
+        for value, half, rate in self.plan.integrated:
+            lf_predict(n, 0.5 * self.dt_prev, as_rows(ps[value], n), as_rows(ps[half], n), as_rows(ps[rate], n))
+
+    def step(self, dt_max=math.inf):
+        ps = self.particles
+        self.predict()
+        self.compute_rates()
+        n = ps.n_owned
+        max_acc = math.sqrt(self.comm.max(max_norm2(n, ps["acc"])))
+        dt, self.dt_limit = self.stepper(max_acc)
+        dt = self.comm.min(dt)
+        if self.dt_first is None:
+            self.dt_first = dt
+        elif dt < self.scene.numerics.cfl.collapse_fraction * self.dt_first:
+            self._blow_up(f"time step collapsed to {dt:.3g} s ({self.dt_limit} constraint; first step {self.dt_first:.3g} s)",
+                          self._worst_acceleration())
+        dt = min(dt, dt_max)
+        first = self.step_count == 0
+        for value, half, rate in self.plan.integrated:
+            lf_kick(n, dt, first, as_rows(ps[value], n), as_rows(ps[half], n), as_rows(ps[rate], n))
+        xsph = ps["xsph"] if self.plan.options["xsph"] else None
+        w = self.walls
+        moved2, reflected, depth = lf_drift(n, dt, ps["x"], ps["v_half"], ps["x_ref"], w.has_lo, w.lo, w.has_hi, w.hi, xsph)
+        self.wall_reflections += reflected
+        self.deepest_penetration = max(self.deepest_penetration, depth)
+        self.t += dt
+        self.step_count += 1
+        self.dt_prev = dt
+        status = self.comm.max(state_status(n, ps["x"], ps["v_half"], ps["rho_half"], self.lo, self.hi))
+        if status != STATE_OK:
+            self._report_bad_state(status)
+        if self.comm.max(depth) > self.h:
+            self._blow_up(f"a particle crossed a wall by {depth:.3g} m in one step (more than h = {self.h:.3g} m)",
+                          self._worst_acceleration())
+        if self.comm.max(moved2) > (0.5 * self.skin) ** 2:
+            self.rebuild()
+        return dt
+
+    def advance_to(self, t_target, on_step=None):
+        """Step until t == t_target exactly (the last step is shortened to land on it)."""
+        while self.t < t_target * (1 - 1e-12):
+            self.step(dt_max=t_target - self.t)
+            if on_step is not None:
+                on_step(self)
+        self.t = max(self.t, t_target)
+
+    def current_state(self):
+        """Bring values to the current time (predict) and the pressure with them, for output."""
+        self.predict()
+        ps, mats = self.particles, self.plan.materials
+        if "p" in ps:
+            fluid.tait_pressure(ps.n_owned, ps["rho"], ps["material"], mats.rho0, mats.eos_b, mats.eos_exponent, ps["p"])
+        return ps
+
+    # -- failure reports ----------------------------------------------------------------
+    def _worst_acceleration(self):
+        ps = self.particles
+        a2 = np.sum(ps.owned("acc") ** 2, axis=1)
+        i = int(np.nanargmax(a2)) if len(a2) else 0
+        return f"largest acceleration {math.sqrt(a2[i]):.3g} m/s^2 at particle id {ps['id'][i]}, x = {ps['x'][i].tolist()}"
+
+    def _report_bad_state(self, status):
+        ps = self.particles
+        n = ps.n_owned
+        x, v, rho = ps["x"][:n], ps["v_half"][:n], ps["rho_half"][:n]
+        bad_finite = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1) & np.isfinite(rho))
+        if status == STATE_NOT_FINITE and bad_finite.any():
+            i = int(np.flatnonzero(bad_finite)[0])
+            self._blow_up(f"non-finite state (NaN/inf) in {int(bad_finite.sum())} particle(s)",
+                          f"first: particle id {ps['id'][i]} of material {self.plan.materials.names[ps['material'][i]]}")
+        outside = np.any((x < self.lo) | (x > self.hi), axis=1)
+        if outside.any():
+            i = int(np.flatnonzero(outside)[0])
+            axis = int(np.flatnonzero((x[i] < self.lo) | (x[i] > self.hi))[0])
+            side = "xyz"[axis] + ("_min" if x[i, axis] < self.lo[axis] else "_max")
+            kind = "wall" if getattr(self.scene.walls, side) else "open side"
+            self._blow_up(f"{int(outside.sum())} particle(s) left the domain through the {side} {kind}",
+                          f"first: particle id {ps['id'][i]} at x = {x[i].tolist()}, v = {v[i].tolist()}")
+        self._blow_up("bad state reported by another rank", "see that rank's message")
+
+    def _blow_up(self, what, where):
+        raise BlowUpError(what, where, self.t, self.step_count)
