@@ -7,7 +7,6 @@ pass, no exchanged field, no time-step limit. `scoursph run SCENE --explain` pri
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,6 +14,7 @@ import numpy as np
 from .materials import PHASE_WATER, MaterialTable, build_material_table
 from .particles import FieldSpec
 from .scene import Scene
+from .tensors import N_SYM
 from .timestep import Constraint
 
 PHASE_NAMES = {PHASE_WATER: "water"}
@@ -61,7 +61,6 @@ def build_plan(scene: Scene) -> Plan:
     dim = scene.dim
     num = scene.numerics
     mats = build_material_table(scene)
-    tensor = dim * dim
     fields = {
         "x": FieldSpec(dim, np.float64, "position"),
         "v": FieldSpec(dim, np.float64, "velocity at step n (predicted)"),
@@ -92,7 +91,7 @@ def build_plan(scene: Scene) -> Plan:
         nu_max = max(mats.viscosity[k] / mats.rho0[k] for k in water_ids)
         if num.viscous_stress and nu_max > 0:
             options["viscous"] = True
-            fields["tau"] = FieldSpec(tensor, np.float64, "viscous stress (eqs. 10-11)")
+            fields["tau"] = FieldSpec(N_SYM, np.float64, "viscous stress (eqs. 10-11), symmetric")
             image_tensors.append("tau")
             halo["every step, after viscous_stress"] = ("tau",)
             passes.append(Pass("viscous_stress", "water", "water",

@@ -22,6 +22,7 @@ from .physics import fluid
 from .physics.boundary import ImageWalls, refresh_image_scalar, refresh_image_tensor, refresh_image_vectors
 from .plan import Plan, build_plan
 from .scene import Scene
+from .tensors import SYM_AXES
 from .timestep import TimeStepper
 
 
@@ -95,7 +96,7 @@ class Simulation:
         for name in scalars:
             refresh_image_scalar(first, src, ps[name])
         for name in tensors:
-            refresh_image_tensor(first, src, sign, ps[name])
+            refresh_image_tensor(first, src, sign, SYM_AXES, ps[name])
 
     # -- rates ------------------------------------------------------------------------
     def compute_rates(self):

@@ -94,15 +94,19 @@ def refresh_image_scalar(first, src, field):
 
 
 @kernel(parallel=True)
-def refresh_image_tensor(first, src, sign, tensor):
-    """T'_ab = s_a s_b T_ab (seed eq. 23); tensors stored row-major as dim*dim components."""
+def refresh_image_tensor(first, src, sign, sym_axes, tensor):
+    """T'_ab = s_a s_b T_ab (seed eq. 23) for symmetric tensors in 6 components
+    (solver/tensors.py); axes beyond the scene's dimension never flip."""
     dim = sign.shape[1]
     for k in prange(src.shape[0]):
         i = first + k
         j = src[k]
-        for a in range(dim):
-            for b in range(dim):
-                tensor[i, a * dim + b] = sign[k, a] * sign[k, b] * tensor[j, a * dim + b]
+        for c in range(sym_axes.shape[0]):
+            a = sym_axes[c, 0]
+            b = sym_axes[c, 1]
+            sa = sign[k, a] if a < dim else 1.0
+            sb = sign[k, b] if b < dim else 1.0
+            tensor[i, c] = sa * sb * tensor[j, c]
 
 
 class ImageWalls:

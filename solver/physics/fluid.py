@@ -9,7 +9,8 @@
 Optional terms are optional arguments: passing None removes the term at compile time
 (Numba prunes `is None` branches before typing), so an absent term costs nothing.
 All loops are gathers over a target's neighbour row: each target writes only its own
-rates, so they run in parallel without races.
+rates, so they run in parallel without races. Accumulators are scalars (no per-particle
+allocation) and z components are guarded by `three`, so 2D and 3D share one kernel.
 """
 
 from __future__ import annotations
@@ -32,90 +33,125 @@ def tait_pressure(n, rho, material, rho0, eos_b, exponent, p):
 @kernel(parallel=True)
 def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, h, norm, tau):
     """tau_i = mu eps_i, seed eqs. (10)-(11), with the SPH velocity gradient
-    dv^b/dx^a = sum_j (m_j / rho_j) (v_j^b - v_i^b) dW_ij/dx_i^a  (Liu & Liu 2003, eq. 4.31)."""
-    dim = x.shape[1]
+    g_ab = dv^b/dx^a = sum_j (m_j / rho_j) (v_j^b - v_i^b) dW_ij/dx_i^a (Liu & Liu 2003, eq. 4.31).
+    tau has 6 symmetric components (solver/tensors.py)."""
+    three = x.shape[1] == 3
     for t in prange(targets.shape[0]):
         i = targets[t]
-        grad = np.zeros((dim, dim))
+        xi0, xi1 = x[i, 0], x[i, 1]
+        vi0, vi1 = v[i, 0], v[i, 1]
+        xi2 = x[i, 2] if three else 0.0
+        vi2 = v[i, 2] if three else 0.0
+        g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
-            r2 = 0.0
-            for a in range(dim):
-                r2 += (x[i, a] - x[j, a]) ** 2
-            r = np.sqrt(r2) + 1e-300
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            d2 = xi2 - x[j, 2] if three else 0.0
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
             f = cubic_spline_dwdr(r, h, norm) / r * mass[j] / rho[j]
-            for a in range(dim):
-                ga = f * (x[i, a] - x[j, a])
-                for b in range(dim):
-                    grad[a, b] += (v[j, b] - v[i, b]) * ga
-        div = 0.0
-        for a in range(dim):
-            div += grad[a, a]
+            w0 = (v[j, 0] - vi0) * f
+            w1 = (v[j, 1] - vi1) * f
+            g00 += w0 * d0
+            g01 += w1 * d0
+            g10 += w0 * d1
+            g11 += w1 * d1
+            if three:
+                w2 = (v[j, 2] - vi2) * f
+                g02 += w2 * d0
+                g12 += w2 * d1
+                g20 += w0 * d2
+                g21 += w1 * d2
+                g22 += w2 * d2
         mu = viscosity[material[i]]
-        for a in range(dim):
-            for b in range(dim):
-                eps = grad[a, b] + grad[b, a] - (2.0 / 3.0 if a == b else 0.0) * div  # eq. (11)
-                tau[i, a * dim + b] = mu * eps  # eq. (10)
+        third_div = (g00 + g11 + g22) / 3.0
+        tau[i, 0] = mu * (2.0 * g00 - 2.0 * third_div)   # eq. (11): g_ab + g_ba - 2/3 div delta_ab
+        tau[i, 1] = mu * (2.0 * g11 - 2.0 * third_div)
+        tau[i, 2] = mu * (2.0 * g22 - 2.0 * third_div)
+        tau[i, 3] = mu * (g01 + g10)
+        tau[i, 4] = mu * (g12 + g21)
+        tau[i, 5] = mu * (g02 + g20)
 
 
 @kernel(parallel=True)
 def fluid_rates(
     targets, start, index, x, v, rho, p, mass, material, sound_speed, h, norm,
     drho, acc,
-    tau=None,                 # viscous stress (dim*dim per row): eq. (7)-(8) with (10)
-    av_alpha=None, av_beta=None,  # artificial viscosity per material: eq. (19)
-    xsph=None, xsph_eps=0.0,  # XSPH velocity correction out: eq. (22)
+    tau=None,                      # viscous stress: eq. (7)-(8) with (10)
+    av_alpha=None, av_beta=None,   # artificial viscosity per material: eq. (19)
+    xsph=None, xsph_eps=0.0,       # XSPH velocity correction out: eq. (22)
 ):
     """Continuity (6) and momentum (7) for each target; adds into drho and acc."""
-    dim = x.shape[1]
+    three = x.shape[1] == 3
+    hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
+        xi0, xi1 = x[i, 0], x[i, 1]
+        vi0, vi1 = v[i, 0], v[i, 1]
+        xi2 = x[i, 2] if three else 0.0
+        vi2 = v[i, 2] if three else 0.0
         rho_i = rho[i]
-        pi_r2 = p[i] / (rho_i * rho_i)
+        ri2 = 1.0 / (rho_i * rho_i)
+        pi_r2 = p[i] * ri2
+        mi = material[i]
         d_rho = 0.0
-        a_i = np.zeros(dim)
-        dx_xsph = np.zeros(dim)
+        a0 = a1 = a2 = 0.0
+        x0 = x1 = x2 = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
-            r2 = 0.0
-            vr = 0.0
-            for a in range(dim):
-                xij = x[i, a] - x[j, a]
-                r2 += xij * xij
-                vr += (v[i, a] - v[j, a]) * xij
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            d2 = xi2 - x[j, 2] if three else 0.0
+            u0 = vi0 - v[j, 0]
+            u1 = vi1 - v[j, 1]
+            u2 = vi2 - v[j, 2] if three else 0.0
+            r2 = d0 * d0 + d1 * d1 + d2 * d2
             r = np.sqrt(r2) + 1e-300
-            dwdr = cubic_spline_dwdr(r, h, norm)
-            fr = dwdr / r                       # grad_i W_ij = fr * x_ij
+            vr = u0 * d0 + u1 * d1 + u2 * d2
+            fr = cubic_spline_dwdr(r, h, norm) / r          # grad_i W_ij = fr x_ij
             m_j = mass[j]
             rho_j = rho[j]
-            d_rho += m_j * vr * fr              # eq. (6): m_j v_ij . grad_i W_ij
-            coef = -m_j * (pi_r2 + p[j] / (rho_j * rho_j))   # eq. (7), pressure part of sigma
-            if av_alpha is not None:
-                if vr < 0.0:                    # eq. (19): only approaching pairs
-                    mi = material[i]
-                    mj = material[j]
-                    phi = h * vr / (r2 + 0.01 * h * h)
-                    c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
-                    alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
-                    beta = 0.5 * (av_beta[mi] + av_beta[mj])
-                    coef -= m_j * (-alpha * c_bar * phi + beta * phi * phi) / (0.5 * (rho_i + rho_j))
-            for a in range(dim):
-                a_i[a] += coef * fr * (x[i, a] - x[j, a])
-            if tau is not None:                 # eq. (7), viscous part of sigma
-                ri2 = 1.0 / (rho_i * rho_i)
-                rj2 = 1.0 / (rho_j * rho_j)
-                for a in range(dim):
-                    sa = 0.0
-                    for b in range(dim):
-                        sa += (tau[i, a * dim + b] * ri2 + tau[j, a * dim + b] * rj2) * fr * (x[i, b] - x[j, b])
-                    a_i[a] += m_j * sa
-            if xsph is not None:                # eq. (22): -eps sum_j (m_j/rho_j) v_ij W_ij
-                w = cubic_spline_w(r, h, norm) * m_j / rho_j
-                for a in range(dim):
-                    dx_xsph[a] -= xsph_eps * w * (v[i, a] - v[j, a])
+            rj2 = 1.0 / (rho_j * rho_j)
+            d_rho += m_j * vr * fr                          # eq. (6)
+            coef = -(pi_r2 + p[j] * rj2)                    # eq. (7): sigma = -p delta
+            if av_alpha is not None:                        # eq. (19), branch-free: zero unless vr < 0
+                mj = material[j]
+                phi = h * min(vr, 0.0) / (r2 + hh)
+                c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
+                alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
+                beta = 0.5 * (av_beta[mi] + av_beta[mj])
+                coef -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
+            coef *= m_j * fr
+            a0 += coef * d0
+            a1 += coef * d1
+            a2 += coef * d2
+            if tau is not None:                             # eq. (7): + (tau_i/rho_i^2 + tau_j/rho_j^2) . grad W
+                fm = m_j * fr
+                s00 = tau[i, 0] * ri2 + tau[j, 0] * rj2
+                s11 = tau[i, 1] * ri2 + tau[j, 1] * rj2
+                s01 = tau[i, 3] * ri2 + tau[j, 3] * rj2
+                if three:
+                    s22 = tau[i, 2] * ri2 + tau[j, 2] * rj2
+                    s12 = tau[i, 4] * ri2 + tau[j, 4] * rj2
+                    s02 = tau[i, 5] * ri2 + tau[j, 5] * rj2
+                    a0 += fm * (s00 * d0 + s01 * d1 + s02 * d2)
+                    a1 += fm * (s01 * d0 + s11 * d1 + s12 * d2)
+                    a2 += fm * (s02 * d0 + s12 * d1 + s22 * d2)
+                else:
+                    a0 += fm * (s00 * d0 + s01 * d1)
+                    a1 += fm * (s01 * d0 + s11 * d1)
+            if xsph is not None:                            # eq. (22): -eps sum_j (m_j/rho_j) v_ij W_ij
+                w = xsph_eps * cubic_spline_w(r, h, norm) * m_j / rho_j
+                x0 -= w * u0
+                x1 -= w * u1
+                x2 -= w * u2
         drho[i] += d_rho
-        for a in range(dim):
-            acc[i, a] += a_i[a]
+        acc[i, 0] += a0
+        acc[i, 1] += a1
+        if three:
+            acc[i, 2] += a2
         if xsph is not None:
-            for a in range(dim):
-                xsph[i, a] = dx_xsph[a]
+            xsph[i, 0] = x0
+            xsph[i, 1] = x1
+            if three:
+                xsph[i, 2] = x2
