@@ -6,6 +6,8 @@ methods with mpi4py reductions, halo exchange and migration.
 
 from __future__ import annotations
 
+import numpy as np
+
 
 class SerialCommunicator:
     rank = 0
@@ -38,3 +40,16 @@ class SerialCommunicator:
 
     def refresh_halo(self, particles, fields):
         pass
+
+    # Output: fields of all owned particles, sorted by global id, on the root rank.
+    def gather_owned(self, particles, names):
+        order = np.argsort(particles.owned("id"), kind="stable")
+        out = {name: particles.owned(name)[order].copy() for name in names}
+        out["rank"] = np.zeros(len(order), dtype=np.int32)
+        return out
+
+    def bcast(self, value):
+        return value
+
+    def abort(self, message, status):
+        raise SystemExit(status)

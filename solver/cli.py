@@ -1,0 +1,84 @@
+"""The command line: `scoursph run SCENE`, `scoursph verify CASE`.
+
+Exit status: 0 success, 1 numerical blow-up (outputs so far are kept), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import BlowUpError, SceneError
+
+
+def _parser():
+    p = argparse.ArgumentParser(prog="scoursph", description="ScourSPH: SPH for soil-water interaction")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a scene file")
+    r.add_argument("scene", type=Path)
+    r.add_argument("--out", type=Path, help="output directory (default runs/<scene name>)")
+    r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--threads", type=int, help="Numba threads per process")
+    v = sub.add_parser("verify", help="run a verification case and check it against its references")
+    v.add_argument("case", help="case name, or 'all'")
+    v.add_argument("--resolution", type=int, help="particles across the reference length (case default if omitted)")
+    v.add_argument("--study", action="store_true", help="resolution study: error and wall time at 3+ spacings")
+    v.add_argument("--out", type=Path, default=Path("runs/verification"))
+    v.add_argument("--quiet", action="store_true")
+    return p
+
+
+def _fail(message, status):
+    print(f"scoursph: error: {message}", file=sys.stderr)
+    return status
+
+
+def main(argv=None):
+    args = _parser().parse_args(argv)
+    if getattr(args, "threads", None):
+        import numba
+        numba.set_num_threads(args.threads)
+    if args.command == "run":
+        return _run(args)
+    return _verify(args)
+
+
+def _run(args):
+    from .parallel.launch import communicator
+    from .plan import build_plan, explain
+    from .scene import load_scene
+    comm = communicator()
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as exc:
+        if comm.is_root():
+            _fail(str(exc), 2)
+        return 2
+    if args.explain:
+        if comm.is_root():
+            print(explain(build_plan(scene), scene))
+        return 0
+    from .run import run_scene
+    out = args.out or Path("runs") / scene.scene.name
+    try:
+        result = run_scene(scene, out, comm=comm, quiet=args.quiet)
+    except BlowUpError as exc:
+        if comm.is_root():
+            _fail(f"{exc}\n  outputs written so far are kept in {out}/", 1)
+        return 1
+    if comm.is_root():
+        print(f"run completed: {result.steps} steps, {result.particles} particles, {result.wall_time:.1f} s wall, "
+              f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s")
+        print(f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, scene.toml, run.json")
+    return 0
+
+
+def _verify(args):
+    from verification.registry import run_cases
+    return run_cases(args.case, args.out, resolution=args.resolution, study=args.study, quiet=args.quiet)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
