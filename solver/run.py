@@ -131,6 +131,9 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
     except BlowUpError as exc:
         status = f"blew up: {exc}"
         raise
+    except Exception as exc:      # MPI: a failure on one rank ends every rank now (no hang in a collective)
+        comm.fail(exc)
+        raise
     finally:
         progress.close(sim)
         wall = time.perf_counter() - t0

@@ -121,6 +121,13 @@ class Output(Strict):
     render_field: str
 
 
+class Parallel(Strict):
+    """MPI domain decomposition (solver/parallel): ignored by serial runs."""
+
+    rebalance_every: Annotated[int, Field(ge=0)] = 100          # steps between load checks; 0 = never
+    imbalance_threshold: Annotated[float, Field(ge=1.0)] = 1.1  # new cuts when max/mean particles exceeds this
+
+
 class Scene(Strict):
     scene: SceneInfo
     domain: Domain
@@ -129,6 +136,7 @@ class Scene(Strict):
     blocks: list[Block]
     numerics: Numerics
     output: Output
+    parallel: Parallel = Parallel()
     material_defaults: dict[str, dict] = {}
     artificial_viscosity_defaults: dict[str, ArtificialViscosity] = {}
 

@@ -54,6 +54,7 @@ class Simulation:
         self.wall_reflections = 0          # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
         self.lists = {}
+        self.comm.setup(scene)            # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
 
     # -- neighbour structures -------------------------------------------------------
@@ -172,7 +173,8 @@ class Simulation:
         if self.comm.max(depth) > self.h:
             self._blow_up(f"a particle crossed a wall by {depth:.3g} m in one step (more than h = {self.h:.3g} m)",
                           self._worst_acceleration())
-        if self.comm.max(moved2) > (0.5 * self.skin) ** 2:
+        rebalance = self.comm.rebalance_due(self.step_count, n)   # MPI: new cuts when the load drifted
+        if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance:
             self.rebuild()
         return dt
 
@@ -216,7 +218,9 @@ class Simulation:
             kind = "wall" if getattr(self.scene.walls, side) else "open side"
             self._blow_up(f"{int(outside.sum())} particle(s) left the domain through the {side} {kind}",
                           f"first: particle id {ps['id'][i]} at x = {x[i].tolist()}, v = {v[i].tolist()}")
-        self._blow_up("bad state reported by another rank", "see that rank's message")
+        self._blow_up("bad state reported by another rank", "see that rank's message", here=False)
 
-    def _blow_up(self, what, where):
+    def _blow_up(self, what, where, here=True):
+        # every call is reached by all ranks (after a reduction); MPI: all report the failing rank's message
+        what, where = self.comm.agree(what, where, here)
         raise BlowUpError(what, where, self.t, self.step_count)

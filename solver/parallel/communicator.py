@@ -31,6 +31,13 @@ class SerialCommunicator:
     def is_root(self):
         return True
 
+    def setup(self, scene):
+        """MPI: the domain box and the scene's [parallel] settings; serial: nothing."""
+
+    def rebalance_due(self, step, n_owned):
+        """MPI: collective check of the load imbalance (True forces a rebuild with new cuts)."""
+        return False
+
     # Halo: a serial run has no ghosts.
     def migrate(self, particles):
         pass
@@ -53,3 +60,15 @@ class SerialCommunicator:
 
     def abort(self, message, status):
         raise SystemExit(status)
+
+    # Faults: the MPI version makes one rank's failure end (or explain) the whole job.
+    def agree(self, what, where, here=True):
+        """The failure message every rank reports (MPI: that of the rank that saw it)."""
+        return what, where
+
+    def fail(self, exc):
+        """An unexpected exception (MPI: print it and abort every rank); serial: re-raised by the caller."""
+
+    def report(self):
+        """Per-rank communication statistics (none in a serial run)."""
+        return []
