@@ -161,6 +161,7 @@ def test_heap_angle_of_a_ramp():
 
 def test_choose_rolling_interpolates():
     assert dem_cal.choose_rolling({0.05: 15.0, 0.1: 19.0, 0.2: 23.0}) == pytest.approx(0.12)
+    assert dem_cal.choose_rolling({0.05: 15.0, 0.08: 24.0, 0.1: 23.0}) == pytest.approx(0.065)
 
 
 def test_stability_estimates():

@@ -447,30 +447,50 @@ def run_collapse(p: Params, ranks: int = 1, tiny: bool = False, out: Path | None
             "energy": np.column_stack([t_e, te[:, 2], te[:, 3]]), "profile": (xc, h)}
 
 
+def heap_solid_fraction(rec: dict, window: tuple) -> float:
+    """Solid fraction inside the heap: grain volume with centres in the window
+    (x0, x1, z0, z1) over the window volume (whole slab depth)."""
+    x0, x1, z0, z1 = window
+    sel = (rec["x"] >= x0) & (rec["x"] < x1) & (rec["z"] >= z0) & (rec["z"] < z1)
+    vol = float(np.sum(4.0 / 3.0 * np.pi * rec["radius"][sel] ** 3))
+    return vol / ((x1 - x0) * (z1 - z0) * rec["depth"])
+
+
 def run_repose(p: Params, ranks: int = 1, tiny: bool = False, label: str | None = None,
-               phi: float | None = None) -> dict:
-    """Pour a heap and measure its angle of repose; returns the angle and details."""
-    C.require("liggghts")
+               reuse: bool = False) -> dict:
+    """Pour a heap and measure its angle of repose; returns the angle and details.
+    With reuse=True an existing heap dump in work/ is reduced again (no run)."""
     label = label or (f"repose_mus{p.sliding:g}_mur{p.rolling:g}" + ("_tiny" if tiny else ""))
     work = WORK_DIR / label
-    _prepare(work)
-    (work / "in.liggghts").write_text(repose_script(p, ranks))
     cmds: list = []
-    wall = C.run(_liggghts_cmd(ranks), work, work / "stdout.txt", None, cmds)
+    if reuse and (work / "heap.dump").exists():
+        prev = json.loads((work / "entry.json").read_text()) if (work / "entry.json").exists() else {}
+        wall, cmds = prev.get("wall_time_s"), prev.get("commands", [])
+        if wall is None:   # not recorded: the LIGGGHTS loop times (setup excluded)
+            loops = re.findall(r"^Loop time of (\S+)", (work / "log.liggghts").read_text(), re.M)
+            wall = round(sum(float(x) for x in loops), 1)
+    else:
+        C.require("liggghts")
+        _prepare(work)
+        (work / "in.liggghts").write_text(repose_script(p, ranks))
+        wall = C.run(_liggghts_cmd(ranks), work, work / "stdout.txt", None, cmds)
     _, rec = read_dump(work / "heap.dump")
-    # phi of the heap itself is unknown; the slope does not depend on phi if phi is
-    # uniform, so any reference works for the angle -- use the column's if given.
-    phi = phi or 0.58
+    rec["depth"] = p.depth
+    # the heap's own solid fraction, measured in its core (the slope in h depends on it)
+    window = (0.03, 0.07, 0.004, 0.016) if not tiny else (0.01, 0.03, 0.002, 0.006)
+    phi = heap_solid_fraction(rec, window)
     xc, h = volume_height(rec["x"], rec["radius"], p.heap_tank_l, p.depth, phi)
     angle, fit = heap_angle(xc, h, x_min=0.03 if not tiny else 0.015)
     th = read_thermo(work / "log.liggghts")
     entry = {"date_utc": C.now_iso(), "mode": "repose", "tiny": tiny, "ranks": ranks,
              "params": _param_record(p), "n_grains": int(len(rec["x"])),
-             "repose_angle_deg": round(angle, 2), "fit": fit, "phi_used": phi,
-             "wall_time_s": round(wall, 1), "timestep": _timestep_record(p),
+             "repose_angle_deg": round(angle, 2), "fit": fit,
+             "heap_solid_fraction": round(phi, 4), "solid_fraction_window_m": list(window),
+             "wall_time_s": wall, "timestep": _timestep_record(p),
              "kinetic_energy_final_J": float(th[-1, 2]) if len(th) else None,
              "commands": cmds, "version": liggghts_version(work / "log.liggghts"),
              "host": C.host_facts()}
+    (work / "entry.json").write_text(json.dumps(entry, indent=2) + "\n")
     with open(work / "heap_profile.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["x_m", "height_m"])
