@@ -49,6 +49,12 @@ class CommStats:
         self.imbalance_last = 1.0
         self.refresh_bytes = 0
 
+    def reset_times(self):
+        """Zero the timers and byte counts (e.g. after set-up and warm-up); sizes are kept."""
+        self.time.clear()
+        self.calls.clear()
+        self.refresh_bytes = 0
+
     def add(self, kind, seconds):
         self.time[kind] += seconds
         self.calls[kind] += 1
