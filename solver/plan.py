@@ -11,13 +11,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .materials import PHASE_WATER, MaterialTable, build_material_table
+from .materials import PHASE_SOIL, PHASE_WATER, YIELD_ELASTIC, MaterialTable, build_material_table
 from .particles import FieldSpec
 from .scene import Scene
 from .tensors import N_SYM
 from .timestep import Constraint
 
-PHASE_NAMES = {PHASE_WATER: "water"}
+PHASE_NAMES = {PHASE_WATER: "water", PHASE_SOIL: "soil"}
 
 
 @dataclass(frozen=True)
@@ -108,13 +108,59 @@ def build_plan(scene: Scene) -> Plan:
             fields["xsph"] = FieldSpec(dim, np.float64, "XSPH correction (eq. 22)")
             terms.append(Term("XSPH", "seed eq. (22)"))
         passes.append(Pass("fluid_rates", "water", "water", tuple(terms), tuple(reads), ("drho", "acc") + (("xsph",) if options["xsph"] else ())))
+    integrated = [("v", "v_half", "acc"), ("rho", "rho_half", "drho")]
+    image_scalars = ["rho"]
+    options["soil"] = False
+    if mats.ids_of_phase(PHASE_SOIL):
+        _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options)
+    if any(b.fixed for b in scene.blocks):
+        fields["fixed"] = FieldSpec(0, np.bool_, "wall particles of fixed blocks: never moved")
+        halo["at rebuild"] = halo["at rebuild"] + ("fixed",)
     return Plan(
         dim=dim, fields=fields, passes=passes,
-        integrated=[("v", "v_half", "acc"), ("rho", "rho_half", "drho")],
+        integrated=integrated,
         constraints=constraints,
-        image_vectors=("x", "v"), image_scalars=("rho",), image_tensors=tuple(image_tensors),
+        image_vectors=("x", "v"), image_scalars=tuple(image_scalars), image_tensors=tuple(image_tensors),
         halo_fields=halo, materials=mats, options=options,
     )
+
+
+def _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options):
+    """Soil terms (seed sec. 2.2, 2.4; Bui et al. 2008): present only with a soil material."""
+    num = scene.numerics
+    soil_ids = mats.ids_of_phase(PHASE_SOIL)
+    options["soil"] = True
+    fields["stress_dev"] = FieldSpec(N_SYM, np.float64, "soil deviatoric stress s at step n (eqs. 12-13)")
+    fields["stress_dev_half"] = FieldSpec(N_SYM, np.float64, "leap-frog s at n+1/2 (eq. 27)")
+    fields["dstress"] = FieldSpec(N_SYM, np.float64, "Hooke-Jaumann rate of s (eqs. 13-15)")
+    fields["mean_stress"] = FieldSpec(0, np.float64, "soil mean stress p, compression positive (eq. 17)")
+    integrated.append(("stress_dev", "stress_dev_half", "dstress"))
+    image_tensors.append("stress_dev")
+    image_scalars.append("mean_stress")
+    plastic = [k for k in soil_ids if mats.soil.yield_model[k] != YIELD_ELASTIC]
+    options["plastic_dilation"] = bool(plastic)
+    if plastic:
+        fields["eps_vp"] = FieldSpec(0, np.float64, "plastic volumetric strain (tension cracking, dilatancy psi)")
+    stress_terms = [Term("mean stress", "seed eq. (17)"),
+                    Term("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager")]
+    options["artificial_stress"] = num.artificial_stress > 0
+    if options["artificial_stress"]:
+        if scene.dim != 2:
+            raise NotImplementedError("artificial stress is implemented for 2D (plane strain) only")
+        fields["art_stress"] = FieldSpec(N_SYM, np.float64, "artificial stress R (Gray et al. 2001)")
+        image_tensors.append("art_stress")
+        stress_terms.append(Term("artificial stress", "Gray, Monaghan & Swift (2001)"))
+    halo["every step, after soil_stress"] = ("mean_stress", "stress_dev") + (("art_stress",) if options["artificial_stress"] else ())
+    passes.append(Pass("soil_stress", "soil", "soil", tuple(stress_terms), (), ("mean_stress", "stress_dev")))
+    terms = [Term("continuity", "seed eq. (6)"), Term("stress divergence", "seed eqs. (12), (20) without seepage"),
+             Term("Hooke-Jaumann deviatoric rate", "seed eqs. (13)-(15)")]
+    options["soil_artificial_viscosity"] = any(mats.av_alpha[k] > 0 or mats.av_beta[k] > 0 for k in soil_ids)
+    if options["soil_artificial_viscosity"]:
+        terms.append(Term("Monaghan artificial viscosity", "seed eq. (19), alpha = beta = 1 for soil"))
+    passes.append(Pass("soil_rates", "soil", "soil", tuple(terms),
+                       ("x", "v", "rho", "mass", "mean_stress", "stress_dev"), ("drho", "acc", "dstress")))
+    c_max = float(mats.sound_speed[soil_ids].max())
+    constraints.append(Constraint("soil sound", "seed eq. (28), c = sqrt((K + 4G/3) / rho0)", num.cfl.sound * scene.h / c_max))
 
 
 def explain(plan: Plan, scene: Scene) -> str:

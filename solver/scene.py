@@ -21,7 +21,7 @@ DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
-WallKind = Literal["free_slip"]
+WallKind = Literal["free_slip", "no_slip"]
 OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
 
 
@@ -67,7 +67,41 @@ class Water(Strict):
         return self.sound_speed_factor * self.typical_velocity  # c = 10 v_typ (seed 2.1)
 
 
-Material = Annotated[Union[Water], Field(discriminator="model")]
+class Soil(Strict):
+    """Elasto-perfectly plastic soil: sigma = -p delta + s (seed eq. 12), s by Hooke's law with
+    the Jaumann rate (13)-(15), p = K (rho/rho0 - 1) (17), yield by Mohr-Coulomb (16, seed) or
+    Drucker-Prager with non-associated flow (Bui et al. 2008), or none (elastic, for checks)."""
+
+    model: Literal["soil"]
+    density: Positive
+    youngs_modulus: Positive
+    poisson_ratio: Annotated[float, Field(ge=0.0, lt=0.5)]
+    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)]   # degrees
+    cohesion: NonNegative
+    dilatancy_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0   # degrees (Drucker-Prager only)
+    yield_model: Literal["mohr_coulomb", "drucker_prager", "elastic"] = "mohr_coulomb"
+    bulk_modulus: Positive | None = None   # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
+
+    @property
+    def shear_modulus(self):
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
+
+    @property
+    def bulk(self):
+        if self.bulk_modulus is not None:
+            return self.bulk_modulus
+        return self.youngs_modulus / (3.0 * (1.0 - 2.0 * self.poisson_ratio))
+
+    @property
+    def sound_speed(self):
+        return float(np.sqrt((self.bulk + 4.0 * self.shear_modulus / 3.0) / self.density))  # P-wave speed
+
+    @property
+    def k0(self):
+        return 1.0 - np.sin(np.radians(self.friction_angle))   # Jaky (1944)
+
+
+Material = Annotated[Union[Water, Soil], Field(discriminator="model")]
 
 
 class RectangleBlock(Strict):
@@ -77,6 +111,8 @@ class RectangleBlock(Strict):
     min: list[float]
     max: list[float]
     hydrostatic: bool = False
+    geostatic: bool = False        # soil: start at sigma_v = rho g depth, sigma_h = K0 sigma_v
+    fixed: bool = False            # wall particles: never moved, contribute to neighbour sums
 
 
 class PolygonBlock(Strict):
@@ -85,6 +121,8 @@ class PolygonBlock(Strict):
     shape: Literal["polygon"]
     vertices: list[list[float]]
     hydrostatic: bool = False
+    geostatic: bool = False
+    fixed: bool = False
 
 
 Block = Annotated[Union[RectangleBlock, PolygonBlock], Field(discriminator="shape")]
@@ -110,6 +148,8 @@ class Numerics(Strict):
     neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
+    artificial_stress: NonNegative = 0.0          # soil tensile-instability remedy, epsilon of Gray et al. (2001)
+    artificial_stress_exponent: Positive = 2.55   # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
 
 
 class Output(Strict):
@@ -210,6 +250,8 @@ def _check_consistency(s: Scene):
             corners = np.array(block.vertices, float)
             if corners.ndim != 2 or corners.shape[1] != 2 or len(corners) < 3:
                 raise _Inconsistent(f"{key}.vertices", "needs three or more [x, y] points")
+        if getattr(block, "geostatic", False) and not isinstance(s.materials[block.material], Soil):
+            raise _Inconsistent(f"{key}.geostatic", "only soil blocks can start geostatic (water: hydrostatic)")
         if np.any(corners < lo - eps) or np.any(corners > hi + eps):
             raise _Inconsistent(key, "lies (partly) outside the domain")
         extent = corners.max(axis=0) - corners.min(axis=0)
@@ -248,15 +290,17 @@ def _fill_material_defaults(raw: dict, defaults: dict) -> dict:
     return raw
 
 
+_UNION_TAGS = {"water", "soil", "rectangle", "polygon"}
+
+
 def _dotted(loc) -> str:
+    """pydantic's error location as the dotted key a user wrote (discriminator tags dropped:
+    a tag follows the material name or block index of a tagged union)."""
     parts = []
-    for item in loc:
-        if isinstance(item, int):
-            parts.append(f"[{item}]")
-        elif item in ("water", "rectangle", "polygon") and parts:
-            continue  # pydantic's discriminator tag, not a key the user wrote
-        else:
-            parts.append(("." if parts else "") + str(item))
+    for k, item in enumerate(loc):
+        if k >= 2 and loc[k - 2] in ("materials", "blocks") and isinstance(item, str) and item in _UNION_TAGS:
+            continue
+        parts.append(f"[{item}]" if isinstance(item, int) else ("." if parts else "") + str(item))
     return "".join(parts) or "(top level)"
 
 

@@ -14,11 +14,11 @@ from .errors import BlowUpError
 from .initial_state import create_particles
 from .integrate import (STATE_NOT_FINITE, STATE_OK, as_rows, lf_drift, lf_kick, lf_predict, max_norm2,
                         state_status)
-from .kernels import SUPPORT_RADIUS, cubic_spline_normalisation
-from .materials import PHASE_WATER
+from .kernels import SUPPORT_RADIUS, cubic_spline_normalisation, cubic_spline_w
+from .materials import PHASE_SOIL, PHASE_WATER
 from .neighbors import CellGrid, CellList
 from .parallel.communicator import SerialCommunicator
-from .physics import fluid
+from .physics import fluid, soil
 from .physics.boundary import ImageWalls, refresh_image_scalar, refresh_image_tensor, refresh_image_vectors
 from .plan import Plan, build_plan
 from .scene import Scene
@@ -54,8 +54,16 @@ class Simulation:
         self.wall_reflections = 0          # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
         self.lists = {}
+        self._start_half_steps()
         self.comm.setup(scene)            # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
+
+    def _start_half_steps(self):
+        """q_{-1/2} = q_0 for every integrated field, so the first kick is the half-kick."""
+        ps = self.particles
+        n = ps.n_owned
+        for value, half, _ in self.plan.integrated:
+            ps[half][:n] = ps[value][:n]
 
     # -- neighbour structures -------------------------------------------------------
     def rebuild(self):
@@ -69,7 +77,7 @@ class Simulation:
         self.walls.rebuild(ps)
         src, sign, offset = self.walls.tables()
         first = ps.n_local
-        refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"])
+        refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"], self.walls.velocity_signs())
         for name in ("mass", "material", "rho"):
             refresh_image_scalar(first, src, ps[name])
         n = ps.n_total
@@ -80,7 +88,7 @@ class Simulation:
         for p in self.plan.passes:
             key = (p.targets, p.neighbours)
             if key not in self.lists:
-                want = {"water": PHASE_WATER}
+                want = {"water": PHASE_WATER, "soil": PHASE_SOIL}
                 targets = np.flatnonzero(owned_phase == want[p.targets]).astype(np.int64)
                 self.lists[key] = self.cells.neighbour_list(ps["x"], targets, self.radius, phase, want[p.neighbours])
         ps["x_ref"][: ps.n_owned] = ps["x"][: ps.n_owned]
@@ -93,7 +101,7 @@ class Simulation:
             return
         first = ps.n_local
         if vectors:
-            refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"])
+            refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"], self.walls.velocity_signs())
         for name in scalars:
             refresh_image_scalar(first, src, ps[name])
         for name in tensors:
@@ -112,6 +120,42 @@ class Simulation:
         for p in plan.passes:
             nl = self.lists[(p.targets, p.neighbours)]
             getattr(self, "_pass_" + p.name)(nl)
+        if "fixed" in ps:
+            fixed = ps["fixed"][:n]
+            ps["acc"][:n][fixed] = 0.0       # wall particles are never moved (v stays 0)
+
+    def _soil_args(self):
+        s = self.plan.materials.soil
+        return (s.bulk, s.shear, s.tan_phi, s.cohesion, s.alpha_phi, s.k_c, s.alpha_psi, s.yield_model)
+
+    def _pass_soil_stress(self, nl, rho="rho", stress="stress_dev", update_history=False):
+        """Mean stress (17) and the return mapping (16) / Bui et al. (2008) on the soil rows,
+        then neighbours' copies (halo, images: eq. 23)."""
+        ps, mats = self.particles, self.plan.materials
+        soil.soil_stress_state(nl.targets, ps[rho], ps[stress], ps["material"], mats.rho0, *self._soil_args(),
+                               ps["mean_stress"], ps["eps_vp"] if "eps_vp" in ps else None, update_history)
+        if update_history:
+            return
+        tensors = ("stress_dev",)
+        if self.plan.options.get("artificial_stress"):
+            soil.artificial_stress(nl.targets, ps["rho"], ps["mean_stress"], ps["stress_dev"],
+                                   self.scene.numerics.artificial_stress, ps["art_stress"])
+            tensors += ("art_stress",)
+        self.comm.refresh_halo(ps, ("mean_stress",) + tensors)
+        self.refresh_images(scalars=("mean_stress",), tensors=tensors)
+
+    def _pass_soil_rates(self, nl):
+        ps, mats, opt = self.particles, self.plan.materials, self.plan.options
+        art = opt.get("artificial_stress")
+        w_dx = float(cubic_spline_w(self.scene.scene.spacing, self.h, self.norm))
+        soil.soil_rates(
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mean_stress"], ps["stress_dev"],
+            ps["mass"], ps["material"], mats.sound_speed, mats.soil.shear, self.h, self.norm,
+            ps["drho"], ps["acc"], ps["dstress"],
+            mats.av_alpha if opt["soil_artificial_viscosity"] else None,
+            mats.av_beta if opt["soil_artificial_viscosity"] else None,
+            ps["art_stress"] if art else None, self.scene.numerics.artificial_stress_exponent, 1.0 / w_dx,
+        )
 
     def _pass_viscous_stress(self, nl):
         ps = self.particles
@@ -156,9 +200,11 @@ class Simulation:
             self._blow_up(f"time step collapsed to {dt:.3g} s ({self.dt_limit} constraint; first step {self.dt_first:.3g} s)",
                           self._worst_acceleration())
         dt = min(dt, dt_max)
-        first = self.step_count == 0
-        for value, half, rate in self.plan.integrated:
-            lf_kick(n, dt, first, as_rows(ps[value], n), as_rows(ps[half], n), as_rows(ps[rate], n))
+        weight = 0.5 * (self.dt_prev + dt)  # dt_prev = 0 on the first step: the half-kick
+        for _, half, rate in self.plan.integrated:
+            lf_kick(n, weight, as_rows(ps[half], n), as_rows(ps[rate], n))
+        if self.plan.options["soil"]:       # plastic return mapping of the new half-step stress
+            self._pass_soil_stress(self.lists[("soil", "soil")], "rho_half", "stress_dev_half", update_history=True)
         xsph = ps["xsph"] if self.plan.options["xsph"] else None
         w = self.walls
         moved2, reflected, depth = lf_drift(n, dt, ps["x"], ps["v_half"], ps["x_ref"], w.has_lo, w.lo, w.has_hi, w.hi, xsph)
@@ -179,12 +225,17 @@ class Simulation:
         return dt
 
     def advance_to(self, t_target, on_step=None):
-        """Step until t == t_target exactly (the last step is shortened to land on it)."""
+        """Step until t == t_target exactly. The last two steps share the remaining time
+        equally when it is less than two full steps, so no sliver step is taken."""
         while self.t < t_target * (1 - 1e-12):
-            self.step(dt_max=t_target - self.t)
+            remaining = t_target - self.t
+            self.step(dt_max=remaining if remaining <= self._dt_estimate() else max(0.5 * remaining, remaining - self._dt_estimate()))
             if on_step is not None:
                 on_step(self)
         self.t = max(self.t, t_target)
+
+    def _dt_estimate(self):
+        return self.dt_prev if self.dt_prev > 0 else math.inf
 
     def current_state(self):
         """Bring values to the current time (predict) and the pressure with them, for output."""
@@ -192,6 +243,10 @@ class Simulation:
         ps, mats = self.particles, self.plan.materials
         if "p" in ps:
             fluid.tait_pressure(ps.n_owned, ps["rho"], ps["material"], mats.rho0, mats.eos_b, mats.eos_exponent, ps["p"])
+        if self.plan.options["soil"]:
+            nl = self.lists[("soil", "soil")]
+            soil.soil_stress_state(nl.targets, ps["rho"], ps["stress_dev"], ps["material"], mats.rho0, *self._soil_args(),
+                                   ps["mean_stress"], ps["eps_vp"] if "eps_vp" in ps else None, False)
         return ps
 
     # -- failure reports ----------------------------------------------------------------

@@ -76,15 +76,19 @@ def find_images(x, n_local, reach, has_lo, lo, has_hi, hi, src, sign, offset):
 
 
 @kernel(parallel=True)
-def refresh_image_vectors(first, src, sign, offset, x, v):
-    """Image positions and velocities from their sources (free slip)."""
+def refresh_image_vectors(first, src, sign, offset, x, v, vsign=None):
+    """Image positions and velocities from their sources (free slip; with vsign, the
+    velocity signs of images across no-slip walls, v' = -v: Takeda et al. 1994)."""
     dim = x.shape[1]
     for k in prange(src.shape[0]):
         i = first + k
         j = src[k]
         for a in range(dim):
             x[i, a] = sign[k, a] * x[j, a] + offset[k, a]
-            v[i, a] = sign[k, a] * v[j, a]
+            if vsign is not None:
+                v[i, a] = vsign[k, a] * v[j, a]
+            else:
+                v[i, a] = sign[k, a] * v[j, a]
 
 
 @kernel(parallel=True)
@@ -120,6 +124,10 @@ class ImageWalls:
         self.sign = np.zeros((0, dim))
         self.offset = np.zeros((0, dim))
         self.any = bool(self.has_lo.any() or self.has_hi.any())
+        kinds = [(getattr(scene.walls, f"{ax}_min"), getattr(scene.walls, f"{ax}_max")) for ax in "xyz"[:dim]]
+        self.no_slip_lo = np.array([k[0] == "no_slip" for k in kinds])
+        self.no_slip_hi = np.array([k[1] == "no_slip" for k in kinds])
+        self.vsign = None
 
     def rebuild(self, particles):
         """Choose images of all local rows; appends them after the local rows."""
@@ -134,8 +142,30 @@ class ImageWalls:
         if n:
             find_images(*args, self.src, self.sign, self.offset)
         self.n = n
+        if self.no_slip_lo.any() or self.no_slip_hi.any():
+            self.vsign = _velocity_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
         particles.ensure_capacity(n_local + n)
         particles.n_image = n
 
     def tables(self):
         return self.src[: self.n], self.sign[: self.n], self.offset[: self.n]
+
+    def velocity_signs(self):
+        """Per-image velocity signs, or None when every wall is free slip."""
+        return self.vsign
+
+
+def _velocity_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
+    """Product over the walls an image is mirrored across of that wall's velocity flip:
+    free slip flips the normal component, no slip flips all (v' = -v)."""
+    vs = np.ones_like(sign)
+    for a in range(sign.shape[1]):
+        mirrored = sign[:, a] < 0
+        at_lo = mirrored & (np.abs(offset[:, a] - 2 * lo[a]) <= np.abs(offset[:, a] - 2 * hi[a]))
+        at_hi = mirrored & ~at_lo
+        for rows, noslip in ((at_lo, no_slip_lo[a]), (at_hi, no_slip_hi[a])):
+            if noslip:
+                vs[rows] *= -1.0
+            else:
+                vs[rows, a] *= -1.0
+    return vs
