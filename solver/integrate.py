@@ -3,8 +3,11 @@
 Velocity, density (and, for soil, deviatoric stress) live at half steps; positions at
 whole steps. One rate evaluation per step:
     predict   q_n      = q_{n-1/2} + (dt_{n-1}/2) (dq/dt)_{n-1}     (rates evaluated here)
-    kick      q_{n+1/2} = q_{n-1/2} + dt_n (dq/dt)_n   (first step: q_0 + dt_0/2 (dq/dt)_0)
+    kick      q_{n+1/2} = q_{n-1/2} + (dt_{n-1} + dt_n)/2 (dq/dt)_n
     drift     x_{n+1}   = x_n + dt_n (v_{n+1/2} + xsph_n)           (XSPH, eq. 22)
+The kick weight (dt_{n-1} + dt_n)/2 is the time between the half steps n-1/2 and n+1/2; it
+equals dt for a constant step (Liu & Liu's form) and stays second-order when dt varies.
+With dt_{-1} = 0 (q_{-1/2} = q_0) it is also the first half-kick q_{1/2} = q_0 + dt_0/2 (dq/dt)_0.
 Each integrated field is a (value, half-step value, rate) triple of 2D arrays, so soil
 stress joins without new code.
 """
@@ -27,13 +30,11 @@ def lf_predict(n, half_dt, value, half, rate):
 
 
 @kernel(parallel=True)
-def lf_kick(n, dt, first_step, value, half, rate):
+def lf_kick(n, weight, half, rate):
+    """half += weight * rate, weight = (dt_{n-1} + dt_n) / 2."""
     for i in prange(n):
-        for k in range(value.shape[1]):
-            if first_step:
-                half[i, k] = value[i, k] + 0.5 * dt * rate[i, k]
-            else:
-                half[i, k] = half[i, k] + dt * rate[i, k]
+        for k in range(half.shape[1]):
+            half[i, k] += weight * rate[i, k]
 
 
 @kernel(parallel=True)

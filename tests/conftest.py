@@ -1,0 +1,32 @@
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+def disordered_lattice(n_side, dim, dx, rng, jitter=0.15):
+    """A lattice of n_side^dim points with random displacements (a lattice hides bugs)."""
+    axes = [(np.arange(n_side) + 0.5) * dx] * dim
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim)
+    return pts + rng.uniform(-jitter, jitter, pts.shape) * dx
+
+
+def write_scene(tmp_path, text, name="scene.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+SCOURSPH = [sys.executable, "-m", "solver.cli"]
+ENV = {**os.environ, "NUMBA_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}

@@ -1,0 +1,85 @@
+"""Slow, obviously-correct NumPy twins of the fast Numba kernels (stumpy's tests/naive.py).
+
+Written from the equations, not from the kernels: all-pairs loops, piecewise kernels as
+printed in the seed paper (with the erratum), no neighbour lists.
+"""
+
+import numpy as np
+
+
+def cubic_spline(r, h, dim):
+    """Seed eq. (5) piecewise, erratum applied."""
+    alpha = {1: 1.0 / h, 2: 15.0 / (7.0 * np.pi * h**2), 3: 3.0 / (2.0 * np.pi * h**3)}[dim]
+    R = np.asarray(r, float) / h
+    return alpha * np.where(R < 1, 2 / 3 - R**2 + 0.5 * R**3, np.where(R < 2, (2 - R) ** 3 / 6, 0.0))
+
+
+def cubic_spline_dwdr(r, h, dim):
+    alpha = {1: 1.0 / h, 2: 15.0 / (7.0 * np.pi * h**2), 3: 3.0 / (2.0 * np.pi * h**3)}[dim]
+    R = np.asarray(r, float) / h
+    return alpha / h * np.where(R < 1, -2 * R + 1.5 * R**2, np.where(R < 2, -0.5 * (2 - R) ** 2, 0.0))
+
+
+def grad_w(xi, xj, h, dim):
+    d = xi - xj
+    r = np.linalg.norm(d)
+    return np.zeros_like(d) if r == 0 else cubic_spline_dwdr(r, h, dim) / r * d
+
+
+def neighbours(x, targets, radius):
+    """All j != i with |x_i - x_j| < radius, as sorted lists."""
+    out = []
+    for i in targets:
+        r = np.linalg.norm(x - x[i], axis=1)
+        out.append(sorted(int(j) for j in np.flatnonzero(r < radius) if j != i))
+    return out
+
+
+def tait(rho, rho0, b, gamma):
+    return b * ((rho / rho0) ** gamma - 1.0)
+
+
+def velocity_gradient(i, x, v, rho, mass, h, dim, nbrs):
+    g = np.zeros((dim, dim))
+    for j in nbrs:
+        g += mass[j] / rho[j] * np.outer(grad_w(x[i], x[j], h, dim), v[j] - v[i])   # g[a, b] = dv^b/dx^a
+    return g
+
+
+def viscous_stress(targets, x, v, rho, mass, mu, h, dim, nbr_lists):
+    """Seed eqs. (10)-(11) as full tensors, returned in 6 symmetric components."""
+    out = np.zeros((len(x), 6))
+    for t, i in enumerate(targets):
+        g = velocity_gradient(i, x, v, rho, mass, h, dim, nbr_lists[t])
+        full = np.zeros((3, 3))
+        full[:dim, :dim] = g
+        eps = full + full.T - 2.0 / 3.0 * np.trace(full) * np.eye(3)
+        tau = mu * eps
+        out[i] = [tau[0, 0], tau[1, 1], tau[2, 2], tau[0, 1], tau[1, 2], tau[0, 2]]
+    return out
+
+
+def sym_to_full(c, dim):
+    full = np.array([[c[0], c[3], c[5]], [c[3], c[1], c[4]], [c[5], c[4], c[2]]])
+    return full[:dim, :dim]
+
+
+def fluid_rates(targets, x, v, rho, p, mass, c, h, dim, nbr_lists, tau=None, alpha=0.0, beta=0.0, xsph_eps=0.0):
+    """Seed eqs. (6), (7) with sigma = -p I + tau, (19) with beta phi^2, (22)."""
+    drho = np.zeros(len(x))
+    acc = np.zeros((len(x), dim))
+    xsph = np.zeros((len(x), dim))
+    for t, i in enumerate(targets):
+        for j in nbr_lists[t]:
+            gw = grad_w(x[i], x[j], h, dim)
+            vij, xij = v[i] - v[j], x[i] - x[j]
+            drho[i] += mass[j] * vij @ gw
+            sig_i = -p[i] * np.eye(dim) + (sym_to_full(tau[i], dim) if tau is not None else 0)
+            sig_j = -p[j] * np.eye(dim) + (sym_to_full(tau[j], dim) if tau is not None else 0)
+            acc[i] += mass[j] * (sig_i / rho[i] ** 2 + sig_j / rho[j] ** 2) @ gw
+            vr = vij @ xij
+            if vr < 0:
+                phi = h * vr / (xij @ xij + 0.01 * h * h)
+                acc[i] -= mass[j] * (-alpha * c * phi + beta * phi**2) / (0.5 * (rho[i] + rho[j])) * gw
+            xsph[i] -= xsph_eps * mass[j] / rho[j] * vij * cubic_spline(np.linalg.norm(xij), h, dim)
+    return drho, acc, xsph

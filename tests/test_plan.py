@@ -1,0 +1,94 @@
+"""The plan builds only what the scene calls for (no field, pass, exchange or dt limit more)."""
+
+import numpy as np
+
+from conftest import ROOT
+from solver.plan import build_plan, explain
+from solver.scene import load_scene
+from solver.simulation import Simulation
+from verification.common import scene_from_file
+
+WATER_ONLY_SOIL_FIELDS = ("stress_dev", "stress_dev_half", "dstress", "mean_stress", "art_stress", "eps_vp")
+
+
+def small_dam_break(**overrides):
+    return scene_from_file("dam_break_2d.toml", **{"scene.spacing": 0.05715 / 10, **overrides})
+
+
+def test_water_only_scene_has_no_soil_field_or_pass():
+    scene = small_dam_break()
+    plan = build_plan(scene)
+    assert not any(f in plan.fields for f in WATER_ONLY_SOIL_FIELDS)
+    assert [p.name for p in plan.passes] == ["viscous_stress", "fluid_rates"]
+    assert all(p.targets == "water" and p.neighbours == "water" for p in plan.passes)
+    sim = Simulation(scene)
+    assert not any(f in sim.particles for f in WATER_ONLY_SOIL_FIELDS)
+
+
+def test_water_only_run_compiles_no_soil_kernel():
+    """A water-only run never calls (so never compiles) a soil kernel in this process."""
+    import subprocess, sys
+    code = ("from verification.common import scene_from_file\n"
+            "from solver.simulation import Simulation\n"
+            "import solver.physics.soil as soil\n"
+            "sim = Simulation(scene_from_file('dam_break_2d.toml', **{'scene.spacing': 0.05715/10}))\n"
+            "[sim.step() for _ in range(3)]\n"
+            "from numba.core.registry import CPUDispatcher\n"
+            "compiled = [n for n, f in vars(soil).items() if isinstance(f, CPUDispatcher) and f.signatures]\n"
+            "print('COMPILED', compiled)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert "COMPILED []" in out.stdout
+
+
+def test_viscosity_off_removes_term_field_and_dt_limit():
+    on = build_plan(small_dam_break())
+    off = build_plan(small_dam_break(**{"numerics.viscous_stress": False}))
+    assert on.has_pass("viscous_stress") and "tau" in on.fields
+    assert not off.has_pass("viscous_stress") and "tau" not in off.fields
+    assert "viscous" in [c.name for c in on.constraints] and "viscous" not in [c.name for c in off.constraints]
+    assert "tau" not in off.image_tensors and not any("tau" in v for v in off.halo_fields.values())
+    terms = [t.name for p in off.passes for t in p.terms]
+    assert "viscous stress divergence" not in terms
+
+
+def test_xsph_off_removes_term_and_field():
+    off = build_plan(small_dam_break(**{"numerics.xsph_epsilon": 0.0}))
+    assert "xsph" not in off.fields
+    assert "XSPH" not in [t.name for p in off.passes for t in p.terms]
+
+
+def test_artificial_viscosity_off_when_alpha_beta_zero():
+    off = build_plan(small_dam_break(**{"numerics.artificial_viscosity": {"water": {"alpha": 0.0, "beta": 0.0}}}))
+    assert not off.options["artificial_viscosity"]
+    assert "Monaghan artificial viscosity" not in [t.name for p in off.passes for t in p.terms]
+
+
+def test_absent_terms_are_not_compiled_into_the_kernel():
+    """The fluid kernel is specialised with None for absent terms: Numba prunes them."""
+    from solver.physics import fluid
+    sim = Simulation(small_dam_break(**{"numerics.viscous_stress": False, "numerics.xsph_epsilon": 0.0}))
+    sim.step()
+    sig = [s for s in fluid.fluid_rates.signatures if len(s) >= 15]
+    assert any(str(s[14]) == "none" and str(s[17]) == "none" for s in sig)   # tau and xsph are None
+
+
+def test_explain_lists_passes_terms_fields(capsys):
+    import subprocess, sys
+    out = subprocess.run([sys.executable, "-m", "solver.cli", "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--explain"],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0
+    for text in ("fluid_rates", "continuity [seed eq. (6)]", "XSPH [seed eq. (22)]", "viscous [seed eq. (30)]",
+                 "bytes per particle", "Not in this plan"):
+        assert text in out.stdout
+    assert "stress_dev" not in out.stdout
+
+
+def test_memory_per_particle_is_within_budget():
+    """Issue target: <= 1 KB per particle including neighbour lists and images."""
+    sim = Simulation(small_dam_break(**{"scene.spacing": 0.05715 / 40}))
+    n = sim.particles.n_owned
+    lists = sum(nl.index.nbytes + nl.start.nbytes + nl.targets.nbytes for nl in sim.lists.values())
+    cells = sim.cells.cells.nbytes + sim.cells.order.nbytes + sim.cells.cell_start.nbytes
+    total = sim.particles.nbytes() + lists + cells
+    assert total / n < 1024

@@ -1,0 +1,104 @@
+"""What every verification case shares: checks with sourced tolerances, timed runs,
+reference data, and the resolution-study table (error and wall time side by side)."""
+
+from __future__ import annotations
+
+import csv
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from solver.scene import parse_scene
+from solver.simulation import Simulation
+
+DATA = Path(__file__).with_name("data")
+SCENES = Path(__file__).resolve().parent.parent / "scenes"
+RESULTS = Path(__file__).with_name("results")
+
+
+@dataclass
+class Check:
+    metric: str
+    value: float
+    tolerance: float
+    source: str                 # where the tolerance comes from
+    passed: bool = field(init=False)
+
+    def __post_init__(self):
+        self.passed = bool(np.isfinite(self.value) and abs(self.value) <= self.tolerance)
+
+    def line(self):
+        mark = "PASS" if self.passed else "FAIL"
+        return f"  [{mark}] {self.metric}: {self.value:.4g} (tolerance {self.tolerance:.4g}; {self.source})"
+
+
+@dataclass
+class CaseResult:
+    case: str
+    resolution: int
+    particles: int
+    steps: int
+    wall_time: float
+    series: dict                # observables over time
+    checks: list[Check] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    figure: Path | None = None
+
+    @property
+    def passed(self):
+        return all(c.passed for c in self.checks)
+
+
+def scene_from_file(name, **overrides):
+    """A scene file from scenes/ with some keys replaced (dotted 'table.key' -> value)."""
+    raw = tomllib.loads((SCENES / name).read_text())
+    for dotted, value in overrides.items():
+        table = raw
+        *parents, key = dotted.split(".")
+        for p in parents:
+            table = table.setdefault(p, {})
+        table[key] = value
+    return parse_scene(raw, SCENES / name)
+
+
+def timed_samples(scene, sample_times, observe):
+    """Run a scene in memory, calling observe(sim) at each sample time.
+
+    Returns (Simulation, list of observations, wall time in s, excluding set-up/compile of
+    the first step so that resolutions compare by their stepping cost)."""
+    sim = Simulation(scene)
+    sim.step()  # compiles every kernel (cached on disk after the first process)
+    start = time.perf_counter()
+    out = []
+    for t in sample_times:
+        if t > sim.t:
+            sim.advance_to(t)
+        sim.current_state()
+        out.append(observe(sim))
+    return sim, out, time.perf_counter() - start
+
+
+def read_csv(name):
+    """Rows of a reference CSV (comment lines starting with # skipped) as dicts."""
+    with open(DATA / name) as fh:
+        lines = [ln for ln in fh if not ln.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
+def rms(a):
+    a = np.asarray(a, float)
+    return float(np.sqrt(np.mean(a * a)))
+
+
+def write_study_table(path, header, rows):
+    """Markdown table of a resolution study (error and wall time side by side)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for r in rows:
+        lines.append("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r) + " |")
+    path.write_text("\n".join(lines) + "\n")
+    return path
