@@ -1,0 +1,100 @@
+"""Slow, obviously-correct NumPy twins of the soil kernels (solver/physics/soil.py), written
+from the equations with full 3x3 matrices (tests/naive.py holds the water twins)."""
+
+import numpy as np
+
+from naive import cubic_spline, grad_w
+
+IDX = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]
+
+
+def to_matrix(v6):
+    m = np.zeros((3, 3))
+    for c, (a, b) in enumerate(IDX):
+        m[a, b] = m[b, a] = v6[c]
+    return m
+
+
+def to_voigt(m):
+    return np.array([m[a, b] for a, b in IDX])
+
+
+def jaumann(s6, grad_v):
+    """Seed eq. (13) corotational terms s^{ag} R^{bg} + s^{gb} R^{ag}, R from eq. (15);
+    grad_v[a, b] = dv^a/dx^b (3x3)."""
+    s = to_matrix(s6)
+    R = 0.5 * (grad_v - grad_v.T)
+    return to_voigt(np.einsum("ag,bg->ab", s, R) + np.einsum("gb,ag->ab", s, R))
+
+
+def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0):
+    """Mohr-Coulomb scale-back (seed eq. 16) or Drucker-Prager return (Bui et al. 2008),
+    from the definitions; returns (p, s6)."""
+    s = to_matrix(s6)
+    j2 = 0.5 * np.sum(s * s)
+    tphi, tpsi = np.tan(np.radians(phi_deg)), np.tan(np.radians(psi_deg))
+    if model == "mohr_coulomb":
+        if tphi > 0:
+            p = max(p, -c / tphi)
+        sf = c + p * tphi
+        return p, (to_voigt(s * sf / np.sqrt(j2)) if np.sqrt(j2) > sf else s6.copy())
+    a_phi = tphi / np.sqrt(9 + 12 * tphi**2)
+    k_c = 3 * c / np.sqrt(9 + 12 * tphi**2)
+    a_psi = tpsi / np.sqrt(9 + 12 * tpsi**2)
+    I1 = -3 * p
+    if -a_phi * I1 + k_c < 0:                  # beyond the apex: tension cracking
+        return k_c / (3 * a_phi) * -1.0, np.zeros(6)
+    f = a_phi * I1 + np.sqrt(j2) - k_c
+    if f <= 0:
+        return p, s6.copy()
+    dl = f / (G + 9 * K * a_phi * a_psi)
+    # sigma_new = sigma_trial - D : dl (a_psi delta + s / (2 sqrt(J2)))
+    sig = -p * np.eye(3) + s
+    sig_new = sig - dl * (3 * K * a_psi * np.eye(3) + G * s / np.sqrt(j2))
+    p_new = -np.trace(sig_new) / 3
+    return p_new, to_voigt(sig_new + p_new * np.eye(3))
+
+
+def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55, w_dx=1.0):
+    """All-pairs continuity (6), momentum (20) with AV (19) and artificial stress, and the
+    Hooke-Jaumann rate (13)-(15), for every particle (one material)."""
+    n, dim = x.shape
+    drho = np.zeros(n)
+    acc = np.zeros((n, dim))
+    ds = np.zeros((n, 6))
+    for i in range(n):
+        sig_i = (to_matrix(s[i]) - p[i] * np.eye(3))[:dim, :dim]
+        L = np.zeros((3, 3))
+        for j in range(n):
+            if i == j or np.linalg.norm(x[i] - x[j]) >= 2 * h:
+                continue
+            gw = grad_w(x[i], x[j], h, dim)
+            vij, xij = v[i] - v[j], x[i] - x[j]
+            drho[i] += mass[j] * vij @ gw
+            sig_j = (to_matrix(s[j]) - p[j] * np.eye(3))[:dim, :dim]
+            T = sig_i / rho[i] ** 2 + sig_j / rho[j] ** 2
+            vr = vij @ xij
+            if vr < 0:
+                phi = h * vr / (xij @ xij + 0.01 * h * h)
+                T = T - (-alpha * c * phi + beta * phi**2) / (0.5 * (rho[i] + rho[j])) * np.eye(dim)
+            if art is not None:
+                f = cubic_spline(np.linalg.norm(xij), h, dim) / w_dx
+                T = T + f**art_n * (to_matrix(art[i]) + to_matrix(art[j]))[:dim, :dim]
+            acc[i] += mass[j] * T @ gw
+            L[:dim, :dim] += mass[j] / rho[j] * np.outer(v[j] - v[i], gw)   # dv^a/dx^b
+        eps = 0.5 * (L + L.T)
+        dev = eps - np.trace(eps) / 3 * np.eye(3)
+        ds[i] = to_voigt(2 * G * dev) + jaumann(s[i], L)
+    return drho, acc, ds
+
+
+def artificial_stress(p, s6, rho, eps):
+    """Gray et al. (2001): R = -eps sum_a max(sigma_a, 0)/rho^2 n_a n_a over the in-plane
+    principal directions, plus the zz (out-of-plane, principal) component."""
+    sig = to_matrix(s6) - p * np.eye(3)
+    w, vec = np.linalg.eigh(sig[:2, :2])
+    R = np.zeros((3, 3))
+    for a in range(2):
+        R[:2, :2] += -eps * max(w[a], 0) / rho**2 * np.outer(vec[:, a], vec[:, a])
+    R[2, 2] = -eps * max(sig[2, 2], 0) / rho**2
+    return to_voigt(R)
