@@ -39,6 +39,7 @@ class CommStats:
 
     def __init__(self):
         self.time = defaultdict(float)
+        self.cpu = 0.0                   # CPU time of this process inside communication calls
         self.calls = defaultdict(int)
         self.ghost_builds = 0
         self.ghosts_sum = 0
@@ -52,6 +53,7 @@ class CommStats:
     def reset_times(self):
         """Zero the timers and byte counts (e.g. after set-up and warm-up); sizes are kept."""
         self.time.clear()
+        self.cpu = 0.0
         self.calls.clear()
         self.refresh_bytes = 0
 
@@ -61,7 +63,7 @@ class CommStats:
 
     def as_dict(self):
         return {
-            "time_s": dict(self.time), "calls": dict(self.calls),
+            "time_s": dict(self.time), "comm_cpu_s": self.cpu, "calls": dict(self.calls),
             "ghosts_last": self.ghosts_last, "ghosts_max": self.ghosts_max,
             "ghosts_mean": self.ghosts_sum / max(self.ghost_builds, 1), "halo_builds": self.ghost_builds,
             "migrated": self.migrated, "rebalances": self.rebalances, "imbalance_last": self.imbalance_last,
@@ -75,8 +77,10 @@ class _Timer:
 
     def __enter__(self):
         self.t0 = time.perf_counter()
+        self.c0 = time.process_time()
 
     def __exit__(self, *exc):
+        self.stats.cpu += time.process_time() - self.c0
         self.stats.add(self.kind, time.perf_counter() - self.t0)
 
 
@@ -190,7 +194,7 @@ class MpiCommunicator:
         On the first call every rank holds the whole set (create_particles is deterministic):
         each computes the same cuts alone and keeps its share."""
         ps = particles
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         x = ps.owned("x")
         if self.decomposition is None:
             if self.domain_lo is None:
@@ -231,6 +235,7 @@ class MpiCommunicator:
             shapes = {n: ps[n].shape[1:] for n in names}
             ps.append_owned(**unpack_dict(recv, dtypes, shapes, layout))
         self.stats.migrated += len(rows)
+        self.stats.cpu += time.process_time() - c0
         self.stats.add("migrate", time.perf_counter() - t0)
 
     # -- halo ----------------------------------------------------------------------------
@@ -239,7 +244,7 @@ class MpiCommunicator:
         this rank's box, with every field any pass reads from neighbours (plus the fields the
         rebuild itself needs). The send lists are kept for refresh_halo."""
         ps = particles
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         ps.n_ghost = ps.n_image = 0
         d = self.decomposition
         x = ps.owned("x")
@@ -273,6 +278,7 @@ class MpiCommunicator:
         s.ghosts_sum += n_ghost
         s.ghosts_last = n_ghost
         s.ghosts_max = max(s.ghosts_max, n_ghost)
+        s.cpu += time.process_time() - c0
         s.add("halo_build", time.perf_counter() - t0)
 
     def refresh_halo(self, particles, fields):
@@ -280,7 +286,7 @@ class MpiCommunicator:
         if self._halo is None:
             return
         ps = particles
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         send_rows, send_counts, recv_counts = self._halo
         layout = self._layout(ps, [f for f in fields if f in ps])
         buf = pack(ps.arrays, layout, send_rows)
@@ -289,6 +295,7 @@ class MpiCommunicator:
             raise RuntimeError(f"halo refresh received {len(recv)} rows for {ps.n_ghost} ghosts")
         unpack(recv, ps.arrays, layout, ps.n_owned)
         self.stats.refresh_bytes += buf.nbytes
+        self.stats.cpu += time.process_time() - c0
         self.stats.add("halo_refresh", time.perf_counter() - t0)
 
     # -- output ----------------------------------------------------------------------------
