@@ -133,7 +133,11 @@ def test_liggghts_tiny_two_ranks(tiny_collapse, tmp_path):
     need("liggghts", "mpirun")
     par = dem.run_collapse(dem.tiny_params(), ranks=2, tiny=True, out=tmp_path)
     a, b = tiny_collapse["entry"], par["entry"]
-    assert b["n_grains"] == a["n_grains"] and b["grain_count_final"] == b["n_grains"]
+    # insert/pack draws the random packing per subdomain, so 2 ranks give another
+    # realization of the column (a few % more or fewer grains below the trim line);
+    # each run keeps its own grains
+    assert b["grain_count_final"] == b["n_grains"]
+    assert abs(b["n_grains"] - a["n_grains"]) < 0.05 * a["n_grains"]
     # DEM trajectories diverge with the rank count; the deposit must not
     assert abs(b["final"]["runout_m"] - a["final"]["runout_m"]) < 0.1 * a["final"]["runout_m"]
 

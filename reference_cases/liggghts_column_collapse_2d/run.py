@@ -166,7 +166,7 @@ fix integr all nve/sphere
 compute rke all erotate/sphere
 variable stp equal step
 thermo_style    custom step atoms ke c_rke
-thermo_modify   lost error norm no
+thermo_modify   lost error norm no flush yes
 """
 
 
@@ -175,9 +175,10 @@ def steps(t: float, dt: float) -> int:
 
 
 def collapse_script(p: Params, ranks: int) -> str:
-    # box: for 2 ranks the x-split (at the box middle) falls on the gate x = W, so
-    # rank 0 holds the column and rank 1 the runout region (no `balance` in 3.8.0)
-    xlo = min(0.0, 2 * p.column_w - p.tank_l) - 1e-3
+    # box: with 2 ranks the x-split (box middle) falls at x = W/2, so each rank holds
+    # half the column while it is filled and settled, and rank 1 takes the runout
+    # (LIGGGHTS 3.8.0 has no `balance`); the empty x < 0 costs only neighbour bins
+    xlo = p.column_w - p.tank_l
     xhi = p.tank_l + 1e-3
     ztop = p.fill_height + 0.02
     n_out = steps(p.output_every, p.dt)
@@ -278,6 +279,18 @@ def marker(log: Path, name: str) -> int:
     if not m:
         raise C.ToolFailed(f"{name} not found in {log}")
     return int(m[-1])
+
+
+def stage_loop_times(log: Path) -> list[dict]:
+    """LIGGGHTS `Loop time` of every run command: seconds, steps, grains."""
+    out = []
+    for m in re.finditer(r"^Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms",
+                         log.read_text(errors="replace"), re.M):
+        t, procs, n, atoms = float(m.group(1)), int(m.group(2)), int(m.group(3)), int(m.group(4))
+        if n > 1:
+            out.append({"seconds": round(t, 1), "procs": procs, "steps": n, "grains": atoms,
+                        "steps_per_s": round(n / t, 1) if t > 0 else None})
+    return out
 
 
 def liggghts_version(log: Path) -> str:
@@ -424,6 +437,7 @@ def run_collapse(p: Params, ranks: int = 1, tiny: bool = False, out: Path | None
         "wall_time_reduction_s": round(time.perf_counter() - t_red, 1),
         "timestep": _timestep_record(p),
         "steps_total": int(finished),
+        "stage_loop_times_s": stage_loop_times(log),
         "final": {"t_s": round(float(hist[-1, 0]), 4), "runout_m": round(float(hist[-1, 1]), 4),
                   "wall_height_m": round(float(hist[-1, 2]), 4),
                   "initial_wall_height_m": round(float(hist[0, 2]), 4),
