@@ -84,6 +84,7 @@ def build_plan(scene: Scene) -> Plan:
     halo = {"every step, before the passes": ("x", "v", "rho"), "at rebuild": ("mass", "material", "id")}
     if water_ids:
         fields["p"] = FieldSpec(0, np.float64, "pressure, Tait EOS (eq. 9)")
+        options["mixed_water"] = len(water_ids) > 1   # per-pair material look-ups only if needed
         c_max = float(mats.sound_speed[water_ids].max())
         constraints.insert(0, Constraint("sound", "seed eq. (28)", num.cfl.sound * scene.h / c_max))
         terms = [Term("continuity", "seed eq. (6)"), Term("pressure gradient", "seed eqs. (7)-(9)")]
@@ -196,7 +197,7 @@ def explain(plan: Plan, scene: Scene) -> str:
     lines.append("Halo exchange (MPI):")
     for when, names in plan.halo_fields.items():
         lines.append(f"  {when}: {', '.join(names)}")
-    absent = [name for name, on in plan.options.items() if not on]
+    absent = [name for name, on in plan.options.items() if not on and not name.startswith("mixed")]
     if absent:
         lines.append("")
         lines.append("Not in this plan (not compiled, allocated or run): " + ", ".join(absent)

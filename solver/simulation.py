@@ -34,6 +34,7 @@ class Simulation:
         self.particles = particles if particles is not None else create_particles(scene, self.plan)
         dim = scene.dim
         self.h = scene.h
+        self.is3d = True if dim == 3 else None   # compile-time dimension switch for the kernels
         self.norm = cubic_spline_normalisation(dim, self.h)
         self.skin = scene.numerics.neighbour_skin * self.h
         self.radius = SUPPORT_RADIUS * self.h + self.skin      # Verlet list radius
@@ -104,8 +105,9 @@ class Simulation:
             refresh_image_vectors(first, src, sign, offset, ps["x"], ps["v"], self.walls.velocity_signs())
         for name in scalars:
             refresh_image_scalar(first, src, ps[name])
+        tsign = self.walls.tensor_signs() if tensors else None    # eq. (23); no-slip walls: T' = T
         for name in tensors:
-            refresh_image_tensor(first, src, sign, SYM_AXES, ps[name])
+            refresh_image_tensor(first, src, tsign, SYM_AXES, ps[name])
 
     # -- rates ------------------------------------------------------------------------
     def compute_rates(self):
@@ -160,7 +162,7 @@ class Simulation:
     def _pass_viscous_stress(self, nl):
         ps = self.particles
         fluid.viscous_stress(nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"],
-                             self.plan.materials.viscosity, self.h, self.norm, ps["tau"])
+                             self.plan.materials.viscosity, self.h, self.norm, ps["tau"], self.is3d)
         self.comm.refresh_halo(ps, ("tau",))
         self.refresh_images(tensors=("tau",))
 
@@ -174,6 +176,7 @@ class Simulation:
             mats.av_beta if opt["artificial_viscosity"] else None,
             ps["xsph"] if opt["xsph"] else None,
             self.scene.numerics.xsph_epsilon,
+            self.is3d, opt["mixed_water"] or None,
         )
 
     # -- one step ---------------------------------------------------------------------

@@ -10,7 +10,8 @@ Optional terms are optional arguments: passing None removes the term at compile 
 (Numba prunes `is None` branches before typing), so an absent term costs nothing.
 All loops are gathers over a target's neighbour row: each target writes only its own
 rates, so they run in parallel without races. Accumulators are scalars (no per-particle
-allocation) and z components are guarded by `three`, so 2D and 3D share one kernel.
+allocation) and z components are guarded by `is3d is not None`, so 2D and 3D share one
+kernel and the 2D specialisation contains no z code at all.
 """
 
 from __future__ import annotations
@@ -31,23 +32,25 @@ def tait_pressure(n, rho, material, rho0, eos_b, exponent, p):
 
 
 @kernel(parallel=True)
-def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, h, norm, tau):
+def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, h, norm, tau, is3d=None):
     """tau_i = mu eps_i, seed eqs. (10)-(11), with the SPH velocity gradient
     g_ab = dv^b/dx^a = sum_j (m_j / rho_j) (v_j^b - v_i^b) dW_ij/dx_i^a (Liu & Liu 2003, eq. 4.31).
-    tau has 6 symmetric components (solver/tensors.py)."""
-    three = x.shape[1] == 3
+    tau has 6 symmetric components (solver/tensors.py). is3d: None in 2D (z code pruned)."""
     for t in prange(targets.shape[0]):
         i = targets[t]
         xi0, xi1 = x[i, 0], x[i, 1]
         vi0, vi1 = v[i, 0], v[i, 1]
-        xi2 = x[i, 2] if three else 0.0
-        vi2 = v[i, 2] if three else 0.0
+        xi2 = vi2 = 0.0
+        if is3d is not None:
+            xi2, vi2 = x[i, 2], v[i, 2]
         g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
             d0 = xi0 - x[j, 0]
             d1 = xi1 - x[j, 1]
-            d2 = xi2 - x[j, 2] if three else 0.0
+            d2 = 0.0
+            if is3d is not None:
+                d2 = xi2 - x[j, 2]
             r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
             f = cubic_spline_dwdr(r, h, norm) / r * mass[j] / rho[j]
             w0 = (v[j, 0] - vi0) * f
@@ -56,7 +59,7 @@ def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, 
             g01 += w1 * d0
             g10 += w0 * d1
             g11 += w1 * d1
-            if three:
+            if is3d is not None:
                 w2 = (v[j, 2] - vi2) * f
                 g02 += w2 * d0
                 g12 += w2 * d1
@@ -80,20 +83,25 @@ def fluid_rates(
     tau=None,                      # viscous stress: eq. (7)-(8) with (10)
     av_alpha=None, av_beta=None,   # artificial viscosity per material: eq. (19)
     xsph=None, xsph_eps=0.0,       # XSPH velocity correction out: eq. (22)
+    is3d=None,                     # None in 2D: every z term is pruned at compile time
+    mixed=None,                    # None when the phase has one material: no per-pair look-ups
 ):
     """Continuity (6) and momentum (7) for each target; adds into drho and acc."""
-    three = x.shape[1] == 3
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
         xi0, xi1 = x[i, 0], x[i, 1]
         vi0, vi1 = v[i, 0], v[i, 1]
-        xi2 = x[i, 2] if three else 0.0
-        vi2 = v[i, 2] if three else 0.0
+        xi2 = vi2 = 0.0
+        if is3d is not None:
+            xi2, vi2 = x[i, 2], v[i, 2]
         rho_i = rho[i]
         ri2 = 1.0 / (rho_i * rho_i)
         pi_r2 = p[i] * ri2
         mi = material[i]
+        c_bar, alpha, beta = 0.0, 0.0, 0.0
+        if av_alpha is not None:
+            c_bar, alpha, beta = sound_speed[mi], av_alpha[mi], av_beta[mi]
         d_rho = 0.0
         a0 = a1 = a2 = 0.0
         x0 = x1 = x2 = 0.0
@@ -101,10 +109,12 @@ def fluid_rates(
             j = index[s]
             d0 = xi0 - x[j, 0]
             d1 = xi1 - x[j, 1]
-            d2 = xi2 - x[j, 2] if three else 0.0
             u0 = vi0 - v[j, 0]
             u1 = vi1 - v[j, 1]
-            u2 = vi2 - v[j, 2] if three else 0.0
+            d2 = u2 = 0.0
+            if is3d is not None:
+                d2 = xi2 - x[j, 2]
+                u2 = vi2 - v[j, 2]
             r2 = d0 * d0 + d1 * d1 + d2 * d2
             r = np.sqrt(r2) + 1e-300
             vr = u0 * d0 + u1 * d1 + u2 * d2
@@ -115,11 +125,12 @@ def fluid_rates(
             d_rho += m_j * vr * fr                          # eq. (6)
             coef = -(pi_r2 + p[j] * rj2)                    # eq. (7): sigma = -p delta
             if av_alpha is not None:                        # eq. (19), branch-free: zero unless vr < 0
-                mj = material[j]
+                if mixed is not None:                       # pair means of c, alpha, beta
+                    mj = material[j]
+                    c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
+                    alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
+                    beta = 0.5 * (av_beta[mi] + av_beta[mj])
                 phi = h * min(vr, 0.0) / (r2 + hh)
-                c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
-                alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
-                beta = 0.5 * (av_beta[mi] + av_beta[mj])
                 coef -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
             coef *= m_j * fr
             a0 += coef * d0
@@ -130,7 +141,7 @@ def fluid_rates(
                 s00 = tau[i, 0] * ri2 + tau[j, 0] * rj2
                 s11 = tau[i, 1] * ri2 + tau[j, 1] * rj2
                 s01 = tau[i, 3] * ri2 + tau[j, 3] * rj2
-                if three:
+                if is3d is not None:
                     s22 = tau[i, 2] * ri2 + tau[j, 2] * rj2
                     s12 = tau[i, 4] * ri2 + tau[j, 4] * rj2
                     s02 = tau[i, 5] * ri2 + tau[j, 5] * rj2
@@ -148,10 +159,10 @@ def fluid_rates(
         drho[i] += d_rho
         acc[i, 0] += a0
         acc[i, 1] += a1
-        if three:
+        if is3d is not None:
             acc[i, 2] += a2
         if xsph is not None:
             xsph[i, 0] = x0
             xsph[i, 1] = x1
-            if three:
+            if is3d is not None:
                 xsph[i, 2] = x2
