@@ -5,6 +5,10 @@ Every local particle within the list radius of a wall gets an image mirrored acr
 and an offset per axis:  x' = s x + o,  v' = s v  (normal velocity reversed, tangential
 kept: free slip), and a tensor T'_ab = s_a s_b T_ab, which is seed eq. (23) for one wall
 (diagonal kept, off-diagonal reversed) and its composition at a corner.
+No-slip walls (v' = -v, Takeda et al. 1994) keep the image stress unchanged, T' = T: their
+velocity field is odd across the wall, so dv_t/dn and the shear stress it builds are even.
+Reversing the shear stress there (eq. 23) would cancel the wall's shear traction in the
+momentum sum, and soil would slide along a "no-slip" floor (tests/test_soil_walls.py).
 Images are chosen when the neighbour lists are rebuilt and refreshed every step.
 """
 
@@ -128,6 +132,7 @@ class ImageWalls:
         self.no_slip_lo = np.array([k[0] == "no_slip" for k in kinds])
         self.no_slip_hi = np.array([k[1] == "no_slip" for k in kinds])
         self.vsign = None
+        self.tsign = None
 
     def rebuild(self, particles):
         """Choose images of all local rows; appends them after the local rows."""
@@ -144,6 +149,7 @@ class ImageWalls:
         self.n = n
         if self.no_slip_lo.any() or self.no_slip_hi.any():
             self.vsign = _velocity_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
+            self.tsign = _tensor_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
         particles.ensure_capacity(n_local + n)
         particles.n_image = n
 
@@ -153,6 +159,11 @@ class ImageWalls:
     def velocity_signs(self):
         """Per-image velocity signs, or None when every wall is free slip."""
         return self.vsign
+
+    def tensor_signs(self):
+        """Per-image axis signs for tensors, T'_ab = t_a t_b T_ab: the mirror sign across
+        free-slip walls (eq. 23), +1 across no-slip walls (stress unchanged)."""
+        return self.tsign if self.tsign is not None else self.sign[: self.n]
 
 
 def _velocity_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
@@ -169,3 +180,15 @@ def _velocity_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
             else:
                 vs[rows, a] *= -1.0
     return vs
+
+
+def _tensor_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
+    """Axis signs for image tensors: -1 only for an axis mirrored across a free-slip wall."""
+    ts = np.ones_like(sign)
+    for a in range(sign.shape[1]):
+        mirrored = sign[:, a] < 0
+        at_lo = mirrored & (np.abs(offset[:, a] - 2 * lo[a]) <= np.abs(offset[:, a] - 2 * hi[a]))
+        at_hi = mirrored & ~at_lo
+        ts[at_lo, a] = 1.0 if no_slip_lo[a] else -1.0
+        ts[at_hi, a] = 1.0 if no_slip_hi[a] else -1.0
+    return ts

@@ -1,0 +1,90 @@
+"""Soil against walls: no-slip image floors, free-slip image walls, fixed-block wall particles.
+
+The no-slip test would have caught the defect of issue 3 where image stresses were always
+mirrored by seed eq. (23) (shear reversed): the wall then exerted no shear traction and
+the bottom row of the Bui et al. (2008) collapse slid on a "no-slip" floor at ~0.8 m/s.
+"""
+
+import numpy as np
+
+from solver.simulation import Simulation
+from verification.column_collapse import scene_at
+
+DX = 0.01
+
+
+def _layer_scene(tilt_deg, walls, blocks, end_time=0.5, domain=(0.6, 0.12)):
+    g = 9.81 * np.array([np.sin(np.radians(tilt_deg)), -np.cos(np.radians(tilt_deg))])
+    return scene_at(DX, end_time, overrides={"domain": {"max": list(domain)}, "scene": {"gravity": g.tolist()},
+                                             "walls": walls, "blocks": blocks})
+
+
+def _by_id(ps, name):
+    n = ps.n_owned
+    return ps[name][:n][np.argsort(ps["id"][:n])]
+
+
+def test_image_stress_kept_across_no_slip_walls_and_mirrored_across_free_slip():
+    sc = _layer_scene(0.0, {"x_min": "free_slip", "y_min": "no_slip"},
+                      [{"name": "b", "material": "bars", "shape": "rectangle", "min": [0, 0], "max": [0.05, 0.05]}])
+    sim = Simulation(sc)
+    ps = sim.particles
+    n = ps.n_local
+    ps["stress_dev"][:n] = [1.0, 2.0, -3.0, 4.0, 0.0, 0.0]
+    sim.refresh_images(tensors=("stress_dev",))
+    src, sign, _ = sim.walls.tables()
+    img = ps["stress_dev"][n:n + len(src)]
+    floor = (sign[:, 0] > 0) & (sign[:, 1] < 0)
+    left = (sign[:, 0] < 0) & (sign[:, 1] > 0)
+    corner = (sign[:, 0] < 0) & (sign[:, 1] < 0)
+    assert floor.any() and left.any() and corner.any()
+    np.testing.assert_array_equal(img[:, :3], np.tile([1.0, 2.0, -3.0], (len(src), 1)))  # normal components kept
+    assert np.all(img[floor, 3] == 4.0)       # no slip: shear stress unchanged (wall carries shear traction)
+    assert np.all(img[left, 3] == -4.0)       # free slip: seed eq. (23), shear reversed (no traction)
+    assert np.all(img[corner, 3] == -4.0)     # composition: reversed by the free-slip wall only
+    # velocities: no slip v' = -v, free slip reverses the normal component only
+    ps["v"][:n] = [0.3, 0.7]
+    sim.refresh_images(vectors=("x", "v"))
+    v_img = ps["v"][n:n + len(src)]
+    np.testing.assert_array_equal(v_img[floor], np.tile([-0.3, -0.7], (floor.sum(), 1)))
+    np.testing.assert_array_equal(v_img[left], np.tile([-0.3, 0.7], (left.sum(), 1)))
+
+
+def test_layer_on_no_slip_floor_under_tilted_gravity_does_not_slide():
+    """A 3 cm layer on a rough floor, gravity tilted 10 deg (< phi = 19.8 deg): an infinite
+    slope that must stand. Elastic shear of the layer, rho g sin(10) H^2 / (2 G) = 6e-6 m,
+    is the only motion allowed away from the slumping ends. Before the fix the middle of the
+    layer slid at ~0.02 m/s (1 cm in 0.5 s)."""
+    sc = _layer_scene(10.0, {"x_min": "free_slip", "x_max": "free_slip", "y_min": "no_slip"},
+                      [{"name": "b", "material": "bars", "shape": "rectangle", "min": [0.1, 0], "max": [0.5, 0.03],
+                        "geostatic": True}])
+    sim = Simulation(sc)
+    x0 = _by_id(sim.particles, "x").copy()
+    mid = (x0[:, 0] > 0.25) & (x0[:, 0] < 0.35)
+    sim.advance_to(0.5)
+    x, v = _by_id(sim.particles, "x"), _by_id(sim.particles, "v_half")
+    slide = np.abs(x[mid, 0] - x0[mid, 0])
+    assert slide.max() < 1e-2 * DX, slide.max()         # far below a particle, far above the elastic 6e-6 m
+    assert np.abs(v[mid]).max() < 1e-3, np.abs(v[mid]).max()
+
+
+def test_fixed_block_wall_particles_never_move_and_carry_the_layer():
+    """Wall particles of a fixed block (rough floor made of soil particles, free-slip box floor
+    below): they keep x and v = 0 exactly, the layer resting on them stays above them and at
+    rest, and under gravity tilted 10 deg (< phi) it does not slide on them."""
+    blocks = [{"name": "floor", "material": "bars", "shape": "rectangle", "min": [0, 0], "max": [0.6, 0.03], "fixed": True},
+              {"name": "layer", "material": "bars", "shape": "rectangle", "min": [0.1, 0.03], "max": [0.5, 0.06],
+               "geostatic": True}]
+    sim = Simulation(_layer_scene(10.0, {"y_min": "free_slip"}, blocks, domain=(0.6, 0.2)))
+    ps = sim.particles
+    x0 = _by_id(ps, "x").copy()
+    fixed = _by_id(ps, "fixed").copy()
+    assert fixed.sum() == 60 * 3
+    mid = ~fixed & (x0[:, 0] > 0.25) & (x0[:, 0] < 0.35)
+    sim.advance_to(0.6)
+    x, v = _by_id(ps, "x"), _by_id(ps, "v_half")
+    np.testing.assert_array_equal(x[fixed], x0[fixed])
+    assert np.all(v[fixed] == 0.0)
+    assert x[~fixed, 1].min() > 0.03                      # no free particle sank into the wall layer
+    assert np.abs(x[mid] - x0[mid]).max() < 1e-2 * DX     # no sliding on the rough wall particles
+    assert np.abs(v[mid]).max() < 1e-3
