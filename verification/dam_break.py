@@ -7,7 +7,11 @@ References
   * OpenFOAM interFoam runs of the same tank (reference_cases/openfoam_dam_break_2d/).
 Observables: front = third-largest particle x plus dx/2 (robust to one or two detached
 droplets; the free surface lies half a spacing beyond the outermost centres); height at the
-wall = highest particle within 2 dx of the wall plus dx/2.
+wall = highest particle within 2 dx of the wall plus dx/2 (the free-surface height that
+Martin & Moyce photographed). A volume-equivalent height over a two-particle band was tried
+and rejected: the band's particles compress unevenly and it stayed at H0 while the surface
+fell. The OpenFOAM reference reports a volume-equivalent height (sum of alpha dy over the
+first cell column), a different quantity: it is compared in a note, not a check.
 Tolerances (see `tolerances`): the experiment's own scatter, measured from the data as the
 RMS difference between Martin & Moyce's two column sizes, plus this run's discretization
 error from the resolution study in verification/results/dam_break_study.csv.
@@ -123,10 +127,12 @@ def time_offset(T_model, Z_model, T_exp, Z_exp):
 
 
 def checks(res):
-    """Pass/fail metrics. Martin & Moyce's time origin is uncertain (their column was released
-    by a membrane, not instantly): OpenFOAM and SPH both lead the raw data by the same dT ~ 0.2.
-    Positions are therefore compared after removing the offset fitted to the independent
-    OpenFOAM reference (never to SPH), and speeds, which do not depend on the origin, directly."""
+    """Pass/fail metrics. Martin & Moyce's time origin is uncertain (the column is released by
+    removing a restraint, not instantly): OpenFOAM and SPH both lead the raw front data by
+    the same dT ~ 0.2. The time origin of each experimental series is therefore calibrated
+    against the independent OpenFOAM reference (never against SPH): dT ~ 0.2 for the front,
+    0 for the height at the wall (OpenFOAM's height fits the data best unshifted). Speeds,
+    which do not depend on the origin, are compared directly."""
     s = res.series
     T, Z, tau, H = s["T"], s["Z"], s["tau"], s["H"]
     dx_a = 1.0 / res.resolution
@@ -154,9 +160,10 @@ def checks(res):
                          rms(np.interp(Te - dT, T, Z) - Ze), scatter + z_disc,
                          f"experimental scatter {scatter:.3g} between column sizes" + note(z_disc)))
         taue, He = experiment_height()
-        dtau = dT / np.sqrt(2.0)
+        dtau = time_offset(Tf / np.sqrt(2.0), Hf, taue[taue <= Tf.max() / np.sqrt(2.0)], He[taue <= Tf.max() / np.sqrt(2.0)])
+        res.notes.append(f"time offset of OpenFOAM a/{fine} height vs Martin & Moyce: dtau = {dtau:.3g} (applied below)")
         keep = (taue - dtau >= 0) & (taue - dtau <= tau.max())
-        out.append(Check(f"wall height vs Martin & Moyce, origin shifted by the same dT, RMS of H/H0 error",
+        out.append(Check(f"wall height vs Martin & Moyce, origin shifted by OpenFOAM's dtau = {dtau:.2f}, RMS of H/H0 error",
                          rms(np.interp(taue[keep] - dtau, tau, H) - He[keep]), scatter / 2 + h_disc,
                          "experimental scatter in Z scaled to H (H0 = 2a)" + note(h_disc)))
     if len(foam) >= 2:
@@ -167,8 +174,8 @@ def checks(res):
         h_unc = rms(np.interp(Tf, Tc, Hc) - Hf)
         out.append(Check(f"front vs OpenFOAM (a/{fine} cells), RMS of Z difference", rms(np.interp(Tf[keep], T, Z) - Zf[keep]),
                          z_unc + z_disc, f"OpenFOAM mesh uncertainty {z_unc:.3g} (a/{coarse} vs a/{fine})" + note(z_disc)))
-        out.append(Check(f"wall height vs OpenFOAM (a/{fine} cells), RMS of H/H0 difference", rms(np.interp(Tf[keep], T, H) - Hf[keep]),
-                         h_unc + h_disc, f"OpenFOAM mesh uncertainty {h_unc:.3g} (a/{coarse} vs a/{fine})" + note(h_disc)))
+        res.notes.append(f"wall height vs OpenFOAM a/{fine} (volume-equivalent there, surface height here): RMS difference "
+                         f"{rms(np.interp(Tf[keep], T, H) - Hf[keep]):.3g} (OpenFOAM mesh uncertainty {h_unc:.3g})")
     return out
 
 
