@@ -19,3 +19,19 @@ def test_still_water_stays_hydrostatic(tmp_path):
     res = hydrostatic.run(hydrostatic.DEFAULT_RESOLUTION, out_dir=tmp_path)
     failed = [c.line() for c in res.checks if not c.passed]
     assert not failed, "\n".join(failed)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="known defect: with the seed's alpha = 0.01 an acoustic mode grows "
+                   "exponentially in still water at H/40 after ~0.25 s (alpha = 0.1 is stable); kept visible until fixed")
+def test_still_water_stays_quiet_at_fine_resolution():
+    res = hydrostatic.run(40)
+    assert res.series["mach"].max() < 0.01
+
+
+@pytest.mark.slow
+def test_still_water_with_stronger_artificial_viscosity_is_stable_at_fine_resolution():
+    """The same fine tank with alpha = 0.1 stays at rest (the control for the xfail above)."""
+    res = hydrostatic.run(40, **hydrostatic.STRONGER_AV)
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)
