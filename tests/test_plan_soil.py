@@ -43,8 +43,10 @@ def test_soil_sound_speed_constraint_from_k_and_g():
 
 
 def test_stress_images_mirror_by_eq23():
-    """Images of soil particles carry T'_ab = s_a s_b T_ab (seed eq. 23); at the no-slip floor
-    the image velocity is reversed entirely, at the free-slip wall only its normal part."""
+    """Images of soil particles carry T'_ab = s_a s_b T_ab (seed eq. 23) across the free-slip
+    walls and T' = T across the no-slip floor (its shear traction; tests/test_soil_walls.py);
+    at the no-slip floor the image velocity is reversed entirely, at the free-slip wall only
+    its normal part."""
     sim = Simulation(small_collapse())
     for _ in range(30):
         sim.step()
@@ -58,7 +60,7 @@ def test_stress_images_mirror_by_eq23():
         i, j = first + k, src[k]
         sx, sy = sign[k]
         np.testing.assert_array_equal(s[i, :3], s[j, :3])
-        assert s[i, 3] == sx * sy * s[j, 3]
+        assert s[i, 3] == sx * s[j, 3]          # only the free-slip (x) wall reverses the shear
         assert ps["mean_stress"][i] == ps["mean_stress"][j]
         # composition over the walls crossed: the floor (no slip) flips both components,
         # the free-slip side wall flips only v_x
