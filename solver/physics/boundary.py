@@ -15,7 +15,6 @@ Images are chosen when the neighbour lists are rebuilt and refreshed every step.
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from ..config import kernel
 
@@ -79,12 +78,12 @@ def find_images(x, n_local, reach, has_lo, lo, has_hi, hi, src, sign, offset):
     return n
 
 
-@kernel(parallel=True)
+@kernel  # images are a thin layer: a serial loop, and no parallel compile cost
 def refresh_image_vectors(first, src, sign, offset, x, v, vsign=None):
     """Image positions and velocities from their sources (free slip; with vsign, the
     velocity signs of images across no-slip walls, v' = -v: Takeda et al. 1994)."""
     dim = x.shape[1]
-    for k in prange(src.shape[0]):
+    for k in range(src.shape[0]):
         i = first + k
         j = src[k]
         for a in range(dim):
@@ -95,18 +94,18 @@ def refresh_image_vectors(first, src, sign, offset, x, v, vsign=None):
                 v[i, a] = sign[k, a] * v[j, a]
 
 
-@kernel(parallel=True)
+@kernel  # images are a thin layer: a serial loop, and no parallel compile cost
 def refresh_image_scalar(first, src, field):
-    for k in prange(src.shape[0]):
+    for k in range(src.shape[0]):
         field[first + k] = field[src[k]]
 
 
-@kernel(parallel=True)
+@kernel  # images are a thin layer: a serial loop, and no parallel compile cost
 def refresh_image_tensor(first, src, sign, sym_axes, tensor):
     """T'_ab = s_a s_b T_ab (seed eq. 23) for symmetric tensors in 6 components
     (solver/tensors.py); axes beyond the scene's dimension never flip."""
     dim = sign.shape[1]
-    for k in prange(src.shape[0]):
+    for k in range(src.shape[0]):
         i = first + k
         j = src[k]
         for c in range(sym_axes.shape[0]):
