@@ -41,7 +41,8 @@ from .common import RESULTS, CaseResult, Check, timed_samples
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
-DATA = Path(os.environ.get("SCOURSPH_REFERENCE_DATA", "/work/shared/reference-data")) / "bui2008_profile.csv"
+DATA = Path(os.environ.get("SCOURSPH_REFERENCE_DATA", Path(__file__).with_name("data"))) / "bui2008_profile.csv"
+LIGGGHTS = ROOT / "reference_cases" / "liggghts_column_collapse_2d" / "data"
 SOURCE = ("Bui, Fukagawa, Sako & Ohno (2008), Int. J. Numer. Anal. Meth. Geomech. 32:1537-1570, "
           "aluminium-bar collapse; digitised data bui2008_profile.csv")
 L0, H0 = 0.2, 0.1
@@ -161,9 +162,38 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     res.notes = [f"dx = {dx * 1000:g} mm, runout {series['runout']:.4f} m (experiment {ref['final_free_surface'][-1, 0]:.3f} m), "
                  f"height at wall {series['wall_height']:.4f} m (experiment {ref['final_free_surface'][0, 1]:.3f} m), "
                  f"farthest particle {x[:, 0].max() + 0.5 * dx:.4f} m"]
+    dem = liggghts_reference()
+    if dem is not None:
+        res.notes.append(f"vs LIGGGHTS DEM ({dem['label']}): runout {series['runout'] - dem['runout']:+.4f} m "
+                         f"(DEM {dem['runout']:.3f} m, calibration sensitivity +/- {dem['runout_spread'] / 2:.3f} m), "
+                         f"free-surface RMS difference {dem_profile_rms(series, dem):.4f} m; DEM vs experiment runout "
+                         f"{dem['runout'] - float(ref['final_free_surface'][-1, 0]):+.4f} m")
     if out_dir is not None:
         res.figure = figure(res, ref, Path(out_dir) / f"column_collapse_r{resolution}.png")
     return res
+
+
+def liggghts_reference():
+    """Final deposit of the LIGGGHTS reference run (reference_cases/liggghts_column_collapse_2d),
+    or None if its data are not in the tree. The spread of the runout over the friction
+    calibration runs (sensitivity.csv) is the DEM reference's own uncertainty."""
+    if not (LIGGGHTS / "final_profile.csv").exists():
+        return None
+    def rows(name):
+        with open(LIGGGHTS / name) as fh:
+            return list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
+    prof = rows("final_profile.csv")
+    hist = rows("history.csv")
+    sens = [float(r["runout_m"]) for r in rows("sensitivity.csv")] if (LIGGGHTS / "sensitivity.csv").exists() else []
+    with open(LIGGGHTS / "final_profile.csv") as fh:
+        label = fh.readline().lstrip("# ").split(":")[0]
+    return {"x": np.array([float(r["x_m"]) for r in prof]), "height": np.array([float(r["height_m"]) for r in prof]),
+            "runout": float(hist[-1]["runout_m"]), "runout_spread": (max(sens) - min(sens)) if sens else 0.0, "label": label}
+
+
+def dem_profile_rms(series, dem):
+    inside = dem["x"] <= min(dem["runout"], series["runout"])
+    return float(np.sqrt(np.mean((profile_at(series, dem["x"][inside]) - dem["height"][inside]) ** 2)))
 
 
 def errors(series, ref):
@@ -220,6 +250,9 @@ def figure(res, ref, path):
     su, f = ref["final_free_surface"], ref["failure_line"]
     ax.plot(su[:, 0], su[:, 1], "ro", ms=3, label="experiment, surface (Bui et al. 2008)")
     ax.plot(f[:, 0], f[:, 1], "rs", ms=3, mfc="none", label="experiment, failure line")
+    dem = liggghts_reference()
+    if dem is not None:
+        ax.plot(dem["x"], dem["height"], "-", color="darkorange", lw=1.2, label="LIGGGHTS DEM deposit (volume-equivalent)")
     ax.plot([0, L0, L0], [H0, H0, 0], "k:", lw=0.8, label="initial column")
     ax.axvline(s["runout"], color="b", lw=0.6)
     ax.set_aspect("equal")
