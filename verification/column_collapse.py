@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import RESULTS, CaseResult, Check, timed_samples
+from .common import RESULTS, CaseResult, Check, study_row, timed_samples
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
@@ -207,13 +207,10 @@ def errors(series, ref):
 
 def discretization_error(resolution):
     """{metric: error} from the committed resolution study, or None if not on file."""
-    if not STUDY_FILE.exists():
+    r = study_row(STUDY_FILE, resolution)
+    if r is None:
         return None
-    with open(STUDY_FILE) as fh:
-        rows = {int(r["resolution"]): r for r in csv.DictReader(fh)}
-    if resolution not in rows:
-        return None
-    return {m: float(rows[resolution][f"{m}_vs_finest"]) for m in METRICS}
+    return {m: float(r[f"{m}_vs_finest"]) for m in METRICS}
 
 
 def checks(res, ref=None):

@@ -102,3 +102,51 @@ def write_study_table(path, header, rows):
         lines.append("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r) + " |")
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def save_study(rows, out_dir, stem):
+    """A resolution study's rows (dicts) as OUT/stem.csv (read back by the checks) and stem.md."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / f"{stem}.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    write_study_table(out / f"{stem}.md", list(rows[0]), [list(r.values()) for r in rows])
+    return rows
+
+
+def study_row(path, resolution):
+    """The row of a committed study CSV for one resolution (strings), or None."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    with open(path) as fh:
+        rows = {int(r["resolution"]): r for r in csv.DictReader(fh)}
+    return rows.get(resolution)
+
+
+def save_figure(fig, path, dpi=120):
+    import matplotlib.pyplot as plt
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
+def case_main(module, argv=None):
+    """`python -m verification.CASE [RESOLUTION] [--study]`."""
+    import sys
+    argv = sys.argv[1:] if argv is None else argv
+    if "--study" in argv:
+        for row in module.study():
+            print(row)
+        return 0
+    res = module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification")
+    print(f"{res.particles} particles, {res.steps} steps, {res.wall_time:.1f} s")
+    for check in res.checks:
+        print(check.line())
+    for note in res.notes:
+        print("  note:", note)
+    return 0 if res.passed else 1

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import RESULTS, CaseResult, Check, read_csv, rms, scene_from_file, timed_samples, write_study_table
+from .common import RESULTS, CaseResult, Check, case_main, read_csv, rms, save_figure, save_study, scene_from_file, study_row, timed_samples
 
 A = 0.05715                     # column width a (m), Martin & Moyce's 2.25 in column
 H0 = 2 * A
@@ -102,14 +102,8 @@ def openfoam_series():
 def discretization_error(resolution):
     """RMS front and height differences between this resolution and the finest of the
     committed resolution study (None if the study has not been run)."""
-    if not STUDY_FILE.exists():
-        return None
-    with open(STUDY_FILE) as fh:
-        rows = {int(r["resolution"]): r for r in csv.DictReader(fh)}
-    if resolution not in rows:
-        return None
-    r = rows[resolution]
-    return float(r["front_vs_finest"]), float(r["height_vs_finest"]), float(r["speed_vs_finest"])
+    r = study_row(STUDY_FILE, resolution)
+    return None if r is None else (float(r["front_vs_finest"]), float(r["height_vs_finest"]), float(r["speed_vs_finest"]))
 
 
 def front_speed(T, Z, T_from=1.4, T_to=3.4):
@@ -202,10 +196,7 @@ def figure(res, path):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
@@ -223,24 +214,9 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
                          speed_vs_finest=abs(front_speed(s["T"], s["Z"]) - front_speed(finest["T"], finest["Z"])),
                          front_vs_experiment=rms(np.interp(Te, s["T"], s["Z"]) - Ze),
                          height_vs_experiment=rms(np.interp(taue[keep], s["tau"], s["H"]) - He[keep])))
-    Path(out_dir).mkdir(parents=True, exist_ok=True)
-    with open(Path(out_dir) / "dam_break_study.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    write_study_table(Path(out_dir) / "dam_break_study.md", list(rows[0]), [list(r.values()) for r in rows])
-    return rows
+    return save_study(rows, out_dir, "dam_break_study")
 
 
 if __name__ == "__main__":
     import sys
-    if "--study" in sys.argv:
-        for row in study():
-            print(row)
-    else:
-        r = run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION, out_dir="runs/verification")
-        print(f"{r.particles} particles, {r.steps} steps, {r.wall_time:.1f} s")
-        for c in r.checks:
-            print(c.line())
-        for line in r.notes:
-            print("  note:", line)
+    raise SystemExit(case_main(sys.modules[__name__]))

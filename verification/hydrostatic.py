@@ -20,13 +20,12 @@ hardly damps; it is a property of the scheme, shown and not hidden.
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
 from .probes import probe
-from .common import RESULTS, CaseResult, Check, rms, scene_from_file, timed_samples, write_study_table
+from .common import RESULTS, CaseResult, Check, case_main, rms, save_figure, save_study, scene_from_file, timed_samples
 
 DEPTH = 0.1
 WIDTH = 0.2
@@ -102,10 +101,7 @@ def figure(res, sim, path):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 STRONGER_AV = {"numerics.artificial_viscosity": {"water": {"alpha": 0.1, "beta": 0.0}}}
@@ -122,24 +118,9 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
                          mean_pressure_error=float(res.series["mean_pressure_error"]),
                          instantaneous_pressure_error=float(res.series["pressure_error"][-1]), mach=float(res.series["mach"][-1]),
                          particle_pressure_noise=float(res.series["particle_pressure_noise"][-1])))
-    Path(out_dir).mkdir(parents=True, exist_ok=True)
-    with open(Path(out_dir) / "hydrostatic_study.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    write_study_table(Path(out_dir) / "hydrostatic_study.md", list(rows[0]), [list(r.values()) for r in rows])
-    return rows
+    return save_study(rows, out_dir, "hydrostatic_study")
 
 
 if __name__ == "__main__":
     import sys
-    if "--study" in sys.argv:
-        for row in study():
-            print(row)
-    else:
-        r = run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION, out_dir="runs/verification")
-        print(f"{r.particles} particles, {r.steps} steps, {r.wall_time:.1f} s")
-        for c in r.checks:
-            print(c.line())
-        for line in r.notes:
-            print("  note:", line)
+    raise SystemExit(case_main(sys.modules[__name__]))

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from .column_collapse import scene_at
-from .common import RESULTS, CaseResult, Check, rms
+from .common import RESULTS, CaseResult, Check, rms, study_row
 
 H = 0.2                     # column height (m)
 WIDTH = 0.12                # column width between the free-slip walls (m)
@@ -196,13 +196,9 @@ def run_heap(resolution):
 
 
 def discretization_error(resolution):
-    if not STUDY_FILE.exists():
+    r = study_row(STUDY_FILE, resolution)
+    if r is None:
         return None
-    with open(STUDY_FILE) as fh:
-        rows = {int(r["resolution"]): r for r in csv.DictReader(fh)}
-    if resolution not in rows:
-        return None
-    r = rows[resolution]
     return {k: float(r[k]) for k in ("settlement_vs_finest", "u_profile_vs_finest", "sigma_vs_finest", "creep_vs_finest")}
 
 
