@@ -361,6 +361,7 @@ class MpiCommunicator:
     def abort(self, message, status):
         sys.stderr.write(f"scoursph: rank {self.rank}: {message}\n")
         sys.stderr.flush()
+        time.sleep(0.2)
         self.comm.Abort(status)
 
     def _excepthook(self, kind, value, tb):
@@ -371,6 +372,7 @@ class MpiCommunicator:
         sys.stderr.write(f"scoursph: error on rank {self.rank} of {self.size} "
                          f"(ending all ranks): {kind.__name__}: {value}\n{text}")
         sys.stderr.flush()
+        time.sleep(0.2)     # let the launcher forward this rank's output before it kills the job
         MPI.COMM_WORLD.Abort(status)
 
     # -- reports -----------------------------------------------------------------------------
