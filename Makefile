@@ -24,7 +24,7 @@ test: $(STAMP)
 
 ## make bench: performance benchmarks (pytest-benchmark), results in .benchmarks/
 bench: $(STAMP)
-	$(BIN)/python -m pytest benchmarks -q --benchmark-only --benchmark-autosave -p no:cacheprovider -o addopts=""
+	$(BIN)/python -m pytest benchmarks -q --benchmark-only --benchmark-autosave -p no:cacheprovider -o addopts="" -o python_files="bench_*.py" -s
 
 ## make verify: every verification case at its default resolution
 verify: $(STAMP)

@@ -21,6 +21,11 @@ def _parser():
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--threads", type=int, help="Numba threads per process")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key before validation, e.g. --set numerics.xsph_epsilon=0 (repeatable)")
+    r.add_argument("--rebalance-every", type=int, metavar="N", help="MPI: rebalance the domain cuts every N steps")
+    r.add_argument("--imbalance-threshold", type=float, metavar="X",
+                   help="MPI: rebalance when the largest rank holds more than X times the mean count")
     v = sub.add_parser("verify", help="run a verification case and check it against its references")
     v.add_argument("case", help="case name, or 'all'")
     v.add_argument("--resolution", type=int, help="particles across the reference length (case default if omitted)")
@@ -50,8 +55,13 @@ def _run(args):
     from .plan import build_plan, explain
     from .scene import load_scene
     comm = communicator()
+    overrides = list(args.set)
+    if args.rebalance_every is not None:
+        overrides.append(f"parallel.rebalance_every={args.rebalance_every}")
+    if args.imbalance_threshold is not None:
+        overrides.append(f"parallel.imbalance_threshold={args.imbalance_threshold}")
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene(args.scene, overrides)
     except SceneError as exc:
         if comm.is_root():
             _fail(str(exc), 2)

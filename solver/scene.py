@@ -326,7 +326,9 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
         raise SceneError(path, _dotted(err["loc"]), _reason(err)) from None
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, overrides=()) -> Scene:
+    """Read, merge and validate a scene file; `overrides` are "dotted.key=value" strings
+    (value in TOML syntax, e.g. parallel.rebalance_every=50) applied before validation."""
     path = Path(path)
     if not path.is_file():
         raise SceneError(path, "(file)", "no such scene file")
@@ -334,6 +336,21 @@ def load_scene(path) -> Scene:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(path, "(syntax)", str(exc)) from None
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip():
+            raise SceneError(path, item, "a command-line override must read key=value")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()          # a bare word is a string: walls.x_max=free_slip
+        table = raw
+        *parents, last = key.strip().split(".")
+        for part in parents:
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                raise SceneError(path, key, "is not a table in the scene")
+        table[last] = value
     return parse_scene(raw, path)
 
 

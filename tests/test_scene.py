@@ -68,3 +68,18 @@ def test_merged_scene_round_trips():
     assert again == scene
     assert again.numerics.xsph_epsilon == 0.001          # default filled in from defaults.toml
     assert again.numerics.artificial_viscosity["water"].alpha == 0.01
+
+
+def test_command_line_overrides_are_validated_like_the_file(tmp_path):
+    scene = load_scene(ROOT / "scenes" / "dam_break_2d.toml", ["parallel.rebalance_every=25", "numerics.xsph_epsilon=0.0",
+                                                              "scene.name=renamed"])
+    assert scene.parallel.rebalance_every == 25 and scene.numerics.xsph_epsilon == 0.0 and scene.scene.name == "renamed"
+    with pytest.raises(SceneError) as err:
+        load_scene(ROOT / "scenes" / "dam_break_2d.toml", ["scene.spacing=-1.0"])
+    assert err.value.key == "scene.spacing"
+    bad = subprocess.run([*SCOURSPH, "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--imbalance-threshold", "0.5", "--explain"],
+                         capture_output=True, text=True, env=ENV, cwd=tmp_path)
+    assert bad.returncode == 2 and "parallel.imbalance_threshold" in bad.stderr
+    good = subprocess.run([*SCOURSPH, "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--rebalance-every", "20", "--explain"],
+                          capture_output=True, text=True, env=ENV, cwd=tmp_path)
+    assert good.returncode == 0
