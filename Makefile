@@ -32,7 +32,7 @@ verify: $(STAMP)
 
 ## make references: regenerate the OpenFOAM and LIGGGHTS reference data (long)
 references: $(STAMP)
-	$(BIN)/python -m reference_cases.run_all
+	$(BIN)/python -m reference_cases.run_all --nice 10
 
 clean:
 	rm -rf runs .pytest_cache .benchmarks

@@ -2,7 +2,7 @@
 
 A 0.20 m long x 0.10 m high column against the left wall collapses to +x. Compared with
 the experiment (digitised final free surface and failure line,
-/work/shared/reference-data/bui2008_profile.csv, from Bui et al. 2008 Fig. 10 as digitised
+verification/data/bui2008_profile.csv (copied from the shared reference data), from Bui et al. 2008 Fig. 10 as digitised
 by LandslideSIM/MaterialPointSolver.jl): runout, height at the wall, free-surface profile,
 failure line.
 
