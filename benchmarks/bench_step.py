@@ -7,17 +7,13 @@ step without neighbour rebuild) and particle_steps_per_s_incl_rebuilds (from the
 which carries the rebuilds in their real proportion).
 """
 
-import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numba
-import numpy as np
 import pytest
 
 from dam_break_setup import dam_break

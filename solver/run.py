@@ -56,7 +56,6 @@ class Progress:
             self.task = self.bar.add_task("run", total=end_time, t=0.0, rate=0.0, dt=0.0, limit="")
             self.bar.start()
             self.t0 = time.perf_counter()
-            self.steps0 = 0
 
     def __call__(self, sim):
         if not self.enabled:
@@ -70,7 +69,6 @@ class Progress:
 
     def close(self, sim):
         if self.enabled:
-            self.__call__(sim) if False else None
             self.bar.update(self.task, completed=sim.t, t=sim.t)
             self.bar.stop()
 

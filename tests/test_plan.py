@@ -1,10 +1,7 @@
 """The plan builds only what the scene calls for (no field, pass, exchange or dt limit more)."""
 
-import numpy as np
-
 from conftest import ROOT
-from solver.plan import build_plan, explain
-from solver.scene import load_scene
+from solver.plan import build_plan
 from solver.simulation import Simulation
 from verification.common import scene_from_file
 

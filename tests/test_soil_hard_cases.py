@@ -47,7 +47,7 @@ def test_tall_column_aspect_2_collapses_and_stops():
 def test_block_dropped_at_2_m_per_s_onto_the_floor():
     sim = Simulation(_scene([{"name": "b", "material": "bars", "shape": "rectangle", "min": [0.1, 0.05], "max": [0.2, 0.1]}],
                             0.6, dx=0.005))
-    ke = _run_and_check(sim, 0.6, ke_ratio=0.02, v0=np.array([0.0, -2.0]))
+    _run_and_check(sim, 0.6, ke_ratio=0.02, v0=np.array([0.0, -2.0]))
     assert sim.particles.owned("x")[:, 1].min() > 0.0
 
 

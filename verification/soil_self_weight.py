@@ -83,7 +83,6 @@ def moment_error(h_over_dx=None):
     """delta = sum_j V_j (y_j - y_i) dW_ij/dy_j - 1 on a square lattice (2D cubic spline):
     the relative error of the SPH gradient of a linear field at an interior particle."""
     from solver.kernels import cubic_spline_dwdr, cubic_spline_normalisation
-    from solver.scene import parse_scene  # noqa: F401  (h/dx comes from the scene defaults)
     if h_over_dx is None:
         h_over_dx = column_scene(DEFAULT_RESOLUTION).h / (H / DEFAULT_RESOLUTION)
     h, norm, total = h_over_dx, cubic_spline_normalisation(2, h_over_dx), 0.0

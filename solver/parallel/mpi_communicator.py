@@ -28,7 +28,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .decomposition import bisect
-from .packing import pack, row_bytes, row_layout, unpack, unpack_dict
+from .packing import pack, row_layout, unpack, unpack_dict
 
 TAG_HALO, TAG_MIGRATE = 11, 12
 
