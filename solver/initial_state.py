@@ -33,7 +33,7 @@ def create_particles(scene: Scene, plan: Plan) -> ParticleSet:
         if "fixed" in plan.fields:
             extra["fixed"] = np.full(len(pts), bool(block.fixed))
         particles.append_owned(
-            x=pts, rho=rho, rho_half=rho, mass=rho * dx**dim,
+            x=pts, rho=rho, mass=rho * dx**dim,
             material=np.full(len(pts), k, dtype=np.int32), **extra,
         )
     return particles

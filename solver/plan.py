@@ -49,6 +49,7 @@ class Plan:
     halo_fields: dict[str, tuple[str, ...]]    # when -> fields other ranks must send
     materials: MaterialTable
     options: dict = field(default_factory=dict)
+    post_drift_passes: list = field(default_factory=list)   # passes run after the drift (x_{n+1}, v_{n+1/2})
 
     def has_pass(self, name):
         return any(p.name == name for p in self.passes)
@@ -110,6 +111,21 @@ def build_plan(scene: Scene) -> Plan:
             terms.append(Term("XSPH", "seed eq. (22)"))
         passes.append(Pass("fluid_rates", "water", "water", tuple(terms), tuple(reads), ("drho", "acc") + (("xsph",) if options["xsph"] else ())))
     integrated = [("v", "v_half", "acc"), ("rho", "rho_half", "drho")]
+    post_drift = []
+    options["symplectic_density"] = num.leapfrog == "symplectic_density" and bool(water_ids)
+    if options["symplectic_density"]:
+        # rho at whole steps like x, from v_{n+1/2} after the drift: a symplectic leap-frog for
+        # the acoustic (rho, v) pair (verification/leapfrog_stability.py); no rho_half
+        integrated.remove(("rho", "rho_half", "drho"))
+        del fields["rho_half"]
+        fluid_pass = passes[-1]
+        passes[-1] = Pass(fluid_pass.name, fluid_pass.targets, fluid_pass.neighbours,
+                          tuple(t for t in fluid_pass.terms if t.name != "continuity"), fluid_pass.reads,
+                          tuple(w for w in fluid_pass.writes if w != "drho"))
+        post_drift.append(Pass("fluid_continuity", "water", "water",
+                               (Term("continuity with v at n+1/2, rho at whole steps", "seed eq. (6)"),),
+                               ("x", "v_half", "mass"), ("drho",)))
+        halo["every step, after the drift"] = ("x", "v_half")
     image_scalars = ["rho"]
     options["soil"] = False
     if mats.ids_of_phase(PHASE_SOIL):
@@ -122,7 +138,7 @@ def build_plan(scene: Scene) -> Plan:
         integrated=integrated,
         constraints=constraints,
         image_vectors=("x", "v"), image_scalars=tuple(image_scalars), image_tensors=tuple(image_tensors),
-        halo_fields=halo, materials=mats, options=options,
+        halo_fields=halo, materials=mats, options=options, post_drift_passes=post_drift,
     )
 
 
@@ -178,7 +194,10 @@ def explain(plan: Plan, scene: Scene) -> str:
         lines.append(f"  {k}. {p.name}: {p.targets} <- {p.neighbours}")
         for t in p.terms:
             lines.append(f"       - {t.name} [{t.equation}]")
-        lines.append(f"       reads from neighbours: {', '.join(p.reads)}; writes: {', '.join(p.writes)}")
+        lines.append(f"       reads from neighbours: {', '.join(p.reads) or 'nothing'}; writes: {', '.join(p.writes)}")
+    for p in plan.post_drift_passes:
+        lines.append(f"  after the drift: {p.name}: {p.targets} <- {p.neighbours}: "
+                     + "; ".join(f"{t.name} [{t.equation}]" for t in p.terms))
     lines.append("  then gravity, and the leap-frog kick/drift (seed eqs. 24-27) of: "
                  + ", ".join(v for v, _, _ in plan.integrated) + ", x")
     lines.append("")
@@ -190,14 +209,14 @@ def explain(plan: Plan, scene: Scene) -> str:
     lines.append(f"Particle fields ({plan.bytes_per_particle()} bytes per particle):")
     for name, spec in plan.fields.items():
         comps = "scalar" if spec.components == 0 else f"{spec.components} components"
-        lines.append(f"  {name:9s} {np.dtype(spec.dtype).name:8s} {comps:14s} {spec.reason}")
+        lines.append(f"  {name:16s} {np.dtype(spec.dtype).name:8s} {comps:14s} {spec.reason}")
     lines.append("")
     lines.append("Image particles (walls): vectors " + ", ".join(plan.image_vectors) + "; scalars "
                  + ", ".join(plan.image_scalars) + ("; tensors " + ", ".join(plan.image_tensors) if plan.image_tensors else ""))
     lines.append("Halo exchange (MPI):")
     for when, names in plan.halo_fields.items():
         lines.append(f"  {when}: {', '.join(names)}")
-    absent = [name for name, on in plan.options.items() if not on and not name.startswith("mixed")]
+    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic"))]
     if absent:
         lines.append("")
         lines.append("Not in this plan (not compiled, allocated or run): " + ", ".join(absent)

@@ -148,8 +148,10 @@ class Numerics(Strict):
     neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
+    leapfrog: Literal["seed", "symplectic_density"] = "seed"
     artificial_stress: NonNegative = 0.0          # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55   # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
+    settling_time: NonNegative = 0.0              # s of kinetic-damping settling before release (t = 0); 0 = off
 
 
 class Output(Strict):
@@ -257,6 +259,8 @@ def _check_consistency(s: Scene):
         extent = corners.max(axis=0) - corners.min(axis=0)
         if np.any(extent < dx):
             raise _Inconsistent("scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)")
+    if s.numerics.leapfrog != "seed" and any(m.model != "water" for m in s.materials.values()):
+        raise _Inconsistent("numerics.leapfrog", "symplectic_density is implemented for water-only scenes")
     for name in s.numerics.artificial_viscosity:
         if name not in s.materials:
             raise _Inconsistent(f"numerics.artificial_viscosity.{name}", "no material of that name")

@@ -52,12 +52,41 @@ class Simulation:
         self.dt_first = None
         self.dt_limit = ""
         self.rebuilds = 0
+        self._rho_state = "rho_half" if "rho_half" in self.particles else "rho"   # density checked for NaN
         self.wall_reflections = 0          # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
         self.lists = {}
         self._start_half_steps()
         self.comm.setup(scene)            # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
+        self.settling = None
+        if scene.numerics.settling_time > 0:
+            self.settle(scene.numerics.settling_time)
+
+    def settle(self, duration):
+        """Settling phase (numerics.settling_time), the alternative to a geostatic start: step
+        under gravity for `duration` s with kinetic damping (Cundall 1971; the dynamic-relaxation
+        form of Barnes 1999): whenever the total kinetic energy falls after a step, the peak of
+        an oscillation has passed and every velocity is set to zero, so the elastic energy of
+        the initial load drains away mode by mode while plastic flow (if the state is not
+        admissible) still happens. Then the clock restarts at t = 0 (release); the step count and
+        diagnostics keep counting. Records {"steps", "resets", "ke_last"} in self.settling."""
+        ps = self.particles
+        ke_prev, resets, steps = 0.0, 0, 0
+        while self.t < duration:
+            self.step(duration - self.t)
+            steps += 1
+            n = ps.n_owned
+            ke = self.comm.sum(0.5 * float(np.sum(ps["mass"][:n] * np.sum(ps["v_half"][:n] ** 2, axis=1))))
+            if ke < ke_prev:
+                ps["v_half"][:n] = 0.0
+                if "v" in ps:
+                    ps["v"][:n] = 0.0
+                resets += 1
+                ke = 0.0
+            ke_prev = ke
+        self.settling = {"steps": steps, "resets": resets, "ke_last": ke_prev, "duration": float(self.t)}
+        self.t = 0.0
 
     def _start_half_steps(self):
         """q_{-1/2} = q_0 for every integrated field, so the first kick is the half-kick."""
@@ -170,7 +199,7 @@ class Simulation:
         ps, mats, opt = self.particles, self.plan.materials, self.plan.options
         fluid.fluid_rates(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"], ps["material"],
-            mats.sound_speed, self.h, self.norm, ps["drho"], ps["acc"],
+            mats.sound_speed, self.h, self.norm, None if opt["symplectic_density"] else ps["drho"], ps["acc"],
             ps["tau"] if opt["viscous"] else None,
             mats.av_alpha if opt["artificial_viscosity"] else None,
             mats.av_beta if opt["artificial_viscosity"] else None,
@@ -216,7 +245,7 @@ class Simulation:
         self.t += dt
         self.step_count += 1
         self.dt_prev = dt
-        status = self.comm.max(state_status(n, ps["x"], ps["v_half"], ps["rho_half"], self.lo, self.hi))
+        status = self.comm.max(state_status(n, ps["x"], ps["v_half"], ps[self._rho_state], self.lo, self.hi))
         if status != STATE_OK:
             self._report_bad_state(status)
         if self.comm.max(depth) > self.h:
@@ -225,7 +254,20 @@ class Simulation:
         rebalance = self.comm.rebalance_due(self.step_count, n)   # MPI: new cuts when the load drifted
         if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance:
             self.rebuild()
+        for p in self.plan.post_drift_passes:
+            getattr(self, "_pass_" + p.name)(self.lists[(p.targets, p.neighbours)], dt)
         return dt
+
+    def _pass_fluid_continuity(self, nl, dt):
+        """rho_{n+1} = rho_n + dt (drho/dt)(x_{n+1}, v_{n+1/2}): ghosts and images carry v_half."""
+        ps = self.particles
+        self.comm.refresh_halo(ps, ("x", "v_half"))
+        src, sign, offset = self.walls.tables()
+        if len(src):
+            refresh_image_vectors(ps.n_local, src, sign, offset, ps["x"], ps["v_half"], self.walls.velocity_signs())
+        fluid.continuity(nl.targets, nl.start, nl.index, ps["x"], ps["v_half"], ps["mass"], self.h, self.norm, ps["drho"], self.is3d)
+        n = ps.n_owned
+        lf_kick(n, dt, as_rows(ps["rho"], n), as_rows(ps["drho"], n))
 
     def advance_to(self, t_target, on_step=None):
         """Step until t == t_target exactly. The last two steps share the remaining time
@@ -262,7 +304,7 @@ class Simulation:
     def _report_bad_state(self, status):
         ps = self.particles
         n = ps.n_owned
-        x, v, rho = ps["x"][:n], ps["v_half"][:n], ps["rho_half"][:n]
+        x, v, rho = ps["x"][:n], ps["v_half"][:n], ps[self._rho_state][:n]
         bad_finite = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1) & np.isfinite(rho))
         if status == STATE_NOT_FINITE and bad_finite.any():
             i = int(np.flatnonzero(bad_finite)[0])

@@ -89,3 +89,21 @@ def test_memory_per_particle_is_within_budget():
     cells = sim.cells.cells.nbytes + sim.cells.order.nbytes + sim.cells.cell_start.nbytes
     total = sim.particles.nbytes() + lists + cells
     assert total / n < 1024
+
+
+def test_symplectic_density_option_moves_continuity_after_the_drift():
+    seed = build_plan(small_dam_break())
+    sym = build_plan(small_dam_break(**{"numerics.leapfrog": "symplectic_density"}))
+    assert "rho_half" in seed.fields and "rho_half" not in sym.fields
+    assert ("rho", "rho_half", "drho") not in sym.integrated
+    assert [p.name for p in sym.post_drift_passes] == ["fluid_continuity"]
+    assert "continuity" not in [t.name for t in sym.passes[-1].terms]
+    assert sym.halo_fields["every step, after the drift"] == ("x", "v_half")
+
+
+def test_symplectic_density_refused_with_soil():
+    import pytest
+    from solver.errors import SceneError
+    with pytest.raises(SceneError) as err:
+        scene_from_file("column_collapse_2d.toml", **{"numerics.leapfrog": "symplectic_density"})
+    assert err.value.key == "numerics.leapfrog"

@@ -36,3 +36,27 @@ def test_still_water_with_stronger_artificial_viscosity_is_stable_at_fine_resolu
     res = hydrostatic.run(40, **hydrostatic.STRONGER_AV)
     failed = [c.line() for c in res.checks if not c.passed]
     assert not failed, "\n".join(failed)
+
+
+@pytest.fixture(scope="module")
+def fine_still_water_symplectic():
+    return hydrostatic.run(40, **{"numerics.leapfrog": "symplectic_density"})
+
+
+@pytest.mark.slow
+def test_symplectic_density_keeps_fine_still_water_quiet(fine_still_water_symplectic):
+    """With rho at whole steps (numerics.leapfrog = "symplectic_density") the acoustic mode
+    that grows under the seed's scheme at H/40 stays damped with the seed's alpha = 0.01:
+    spurious Mach and gauge pressure meet the case's tolerances (hydrostatic.py)."""
+    res = fine_still_water_symplectic
+    by_metric = {c.metric: c for c in res.checks}
+    assert res.series["mach"].max() < 0.01
+    assert by_metric["RMS error of time-averaged gauge pressure / (rho0 g H)"].passed
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="known defect of the seed's mirror images: an image carries its source's "
+                   "pressure, so the first layer has no hydrostatic support and settles onto the floor at H/40 "
+                   "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed")
+def test_bottom_layer_stays_off_the_wall_at_fine_resolution(fine_still_water_symplectic):
+    assert fine_still_water_symplectic.sim_reflections == 0

@@ -74,6 +74,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
               "still water must never reach a wall plane"),
     ]
     res.series["mean_pressure_error"] = e_mean
+    res.sim_reflections = sim.wall_reflections
     res.notes = [f"instantaneous gauge pressure error at the end {e_p[-1]:.3g} (max over the run {e_p.max():.3g}); "
                  f"max Mach over the run {mach.max():.3g}",
                  f"per-particle pressure noise at the end (RMS / rho0 g H): {e_particle[-1]:.3g} (acoustic, see docstring)"]

@@ -122,7 +122,8 @@ def fluid_rates(
             m_j = mass[j]
             rho_j = rho[j]
             rj2 = 1.0 / (rho_j * rho_j)
-            d_rho += m_j * vr * fr                          # eq. (6)
+            if drho is not None:
+                d_rho += m_j * vr * fr                      # eq. (6)
             coef = -(pi_r2 + p[j] * rj2)                    # eq. (7): sigma = -p delta
             if av_alpha is not None:                        # eq. (19), branch-free: zero unless vr < 0
                 if mixed is not None:                       # pair means of c, alpha, beta
@@ -156,7 +157,8 @@ def fluid_rates(
                 x0 -= w * u0
                 x1 -= w * u1
                 x2 -= w * u2
-        drho[i] += d_rho
+        if drho is not None:
+            drho[i] += d_rho
         acc[i, 0] += a0
         acc[i, 1] += a1
         if is3d is not None:
@@ -166,3 +168,30 @@ def fluid_rates(
             xsph[i, 1] = x1
             if is3d is not None:
                 xsph[i, 2] = x2
+
+
+@kernel(parallel=True)
+def continuity(targets, start, index, x, v, mass, h, norm, drho, is3d=None):
+    """Seed eq. (6) alone: drho_i = sum_j m_j (v_i - v_j) . grad_i W_ij (written, not added).
+    With v = v_{n+1/2} and x = x_{n+1} it advances rho at whole steps (numerics.leapfrog =
+    "symplectic_density")."""
+    for t in prange(targets.shape[0]):
+        i = targets[t]
+        xi0, xi1 = x[i, 0], x[i, 1]
+        vi0, vi1 = v[i, 0], v[i, 1]
+        xi2 = vi2 = 0.0
+        if is3d is not None:
+            xi2, vi2 = x[i, 2], v[i, 2]
+        d_rho = 0.0
+        for s in range(start[t], start[t + 1]):
+            j = index[s]
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            vr = (vi0 - v[j, 0]) * d0 + (vi1 - v[j, 1]) * d1
+            d2 = 0.0
+            if is3d is not None:
+                d2 = xi2 - x[j, 2]
+                vr += (vi2 - v[j, 2]) * d2
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+            d_rho += mass[j] * vr * cubic_spline_dwdr(r, h, norm) / r
+        drho[i] = d_rho
