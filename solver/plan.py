@@ -113,6 +113,7 @@ def build_plan(scene: Scene) -> Plan:
     integrated = [("v", "v_half", "acc"), ("rho", "rho_half", "drho")]
     post_drift = []
     options["symplectic_density"] = num.leapfrog == "symplectic_density" and bool(water_ids)
+    options["hydrostatic_images"] = num.image_pressure == "hydrostatic" and bool(water_ids)
     if options["symplectic_density"]:
         # rho at whole steps like x, from v_{n+1/2} after the drift: a symplectic leap-frog for
         # the acoustic (rho, v) pair (verification/leapfrog_stability.py); no rho_half
@@ -213,10 +214,12 @@ def explain(plan: Plan, scene: Scene) -> str:
     lines.append("")
     lines.append("Image particles (walls): vectors " + ", ".join(plan.image_vectors) + "; scalars "
                  + ", ".join(plan.image_scalars) + ("; tensors " + ", ".join(plan.image_tensors) if plan.image_tensors else ""))
+    if plan.options.get("hydrostatic_images"):
+        lines.append("  image pressure: source pressure + rho g . (x_image - x_source) (numerics.image_pressure = hydrostatic)")
     lines.append("Halo exchange (MPI):")
     for when, names in plan.halo_fields.items():
         lines.append(f"  {when}: {', '.join(names)}")
-    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic"))]
+    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic", "hydrostatic"))]
     if absent:
         lines.append("")
         lines.append("Not in this plan (not compiled, allocated or run): " + ", ".join(absent)

@@ -149,6 +149,7 @@ class Numerics(Strict):
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
     leapfrog: Literal["seed", "symplectic_density"] = "seed"
+    image_pressure: Literal["mirror", "hydrostatic"] = "mirror"
     artificial_stress: NonNegative = 0.0          # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55   # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0              # s of kinetic-damping settling before release (t = 0); 0 = off

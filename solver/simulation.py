@@ -19,7 +19,8 @@ from .materials import PHASE_SOIL, PHASE_WATER
 from .neighbors import CellGrid, CellList
 from .parallel.communicator import SerialCommunicator
 from .physics import fluid, soil
-from .physics.boundary import ImageWalls, refresh_image_scalar, refresh_image_tensor, refresh_image_vectors
+from .physics.boundary import (ImageWalls, add_hydrostatic_image_pressure, refresh_image_scalar, refresh_image_tensor,
+                               refresh_image_vectors)
 from .plan import Plan, build_plan
 from .scene import Scene
 from .tensors import SYM_AXES
@@ -148,6 +149,8 @@ class Simulation:
         self.refresh_images(vectors=plan.image_vectors, scalars=plan.image_scalars)
         if "p" in ps:
             fluid.tait_pressure(ps.n_total, ps["rho"], ps["material"], mats.rho0, mats.eos_b, mats.eos_exponent, ps["p"])
+            if plan.options.get("hydrostatic_images") and ps.n_image:
+                add_hydrostatic_image_pressure(ps.n_local, self.walls.tables()[0], ps["x"], ps["rho"], self.gravity, ps["p"])
         for p in plan.passes:
             nl = self.lists[(p.targets, p.neighbours)]
             getattr(self, "_pass_" + p.name)(nl)

@@ -107,3 +107,12 @@ def test_symplectic_density_refused_with_soil():
     with pytest.raises(SceneError) as err:
         scene_from_file("column_collapse_2d.toml", **{"numerics.leapfrog": "symplectic_density"})
     assert err.value.key == "numerics.leapfrog"
+
+
+def test_hydrostatic_image_pressure_option_is_planned_and_explained():
+    import subprocess, sys
+    plan = build_plan(small_dam_break(**{"numerics.image_pressure": "hydrostatic"}))
+    assert plan.options["hydrostatic_images"] and not build_plan(small_dam_break()).options["hydrostatic_images"]
+    out = subprocess.run([sys.executable, "-m", "solver.cli", "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--explain",
+                          "--set", 'numerics.image_pressure="hydrostatic"'], capture_output=True, text=True, cwd=ROOT)
+    assert "image pressure: source pressure + rho g" in out.stdout

@@ -60,3 +60,13 @@ def test_symplectic_density_keeps_fine_still_water_quiet(fine_still_water_symple
                    "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed")
 def test_bottom_layer_stays_off_the_wall_at_fine_resolution(fine_still_water_symplectic):
     assert fine_still_water_symplectic.sim_reflections == 0
+
+
+@pytest.mark.slow
+def test_hydrostatic_image_pressure_keeps_fine_still_water_at_rest():
+    """numerics.image_pressure = "hydrostatic" gives the first layer the support the seed's
+    mirror images lack: at H/40 every check of the case passes, with the seed's leap-frog and
+    alpha = 0.01 (no reflection at the floor, spurious Mach < 0.01, gauge pressure within h/H)."""
+    res = hydrostatic.run(40, **{"numerics.image_pressure": "hydrostatic"})
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)

@@ -191,3 +191,17 @@ def _tensor_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
         ts[at_lo, a] = 1.0 if no_slip_lo[a] else -1.0
         ts[at_hi, a] = 1.0 if no_slip_hi[a] else -1.0
     return ts
+
+
+@kernel
+def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p):
+    """p_image = p_source + rho_source g . (x_image - x_source): the mirror pressure plus the
+    hydrostatic difference between the two points (numerics.image_pressure = "hydrostatic")."""
+    dim = x.shape[1]
+    for k in range(src.shape[0]):
+        i = first + k
+        j = src[k]
+        dp = 0.0
+        for a in range(dim):
+            dp += gravity[a] * (x[i, a] - x[j, a])
+        p[i] += rho[j] * dp
