@@ -86,11 +86,14 @@ def _neighbour_cell(c, offset, shape):
 
 
 @kernel(parallel=True)
-def _count(targets, x, cells, cell_start, order, shape, offsets, radius2, phase, want, counts):
+def _scan(targets, x, cells, cell_start, order, shape, offsets, radius2, phase, want, counts_or_start, index=None):
+    """One scan of the 3^dim cells around each target. With index=None it counts the
+    neighbours into counts_or_start[t]; with an index array it writes them from
+    counts_or_start[t] on (Numba compiles the two variants separately)."""
     dim = x.shape[1]
     for t in prange(targets.shape[0]):
         i = targets[t]
-        m = 0
+        m = 0 if index is None else counts_or_start[t]
         for o in range(offsets.shape[0]):
             nc = _neighbour_cell(cells[i], offsets[o], shape)
             if nc < 0:
@@ -104,31 +107,11 @@ def _count(targets, x, cells, cell_start, order, shape, offsets, radius2, phase,
                     dx = x[i, d] - x[j, d]
                     r2 += dx * dx
                 if r2 < radius2:
+                    if index is not None:
+                        index[m] = j
                     m += 1
-        counts[t] = m
-
-
-@kernel(parallel=True)
-def _fill(targets, x, cells, cell_start, order, shape, offsets, radius2, phase, want, start, index):
-    dim = x.shape[1]
-    for t in prange(targets.shape[0]):
-        i = targets[t]
-        m = start[t]
-        for o in range(offsets.shape[0]):
-            nc = _neighbour_cell(cells[i], offsets[o], shape)
-            if nc < 0:
-                continue
-            for s in range(cell_start[nc], cell_start[nc + 1]):
-                j = order[s]
-                if j == i or (want >= 0 and phase[j] != want):
-                    continue
-                r2 = 0.0
-                for d in range(dim):
-                    dx = x[i, d] - x[j, d]
-                    r2 += dx * dx
-                if r2 < radius2:
-                    index[m] = j
-                    m += 1
+        if index is None:
+            counts_or_start[t] = m
 
 
 @dataclass
@@ -170,11 +153,11 @@ class CellList:
             want_phase = -1
         counts = np.empty(len(targets), dtype=np.int64)
         args = (x, self.cells, self.cell_start, self.order, g.shape, g.offsets, radius * radius, phase, want_phase)
-        _count(targets, *args, counts)
+        _scan(targets, *args, counts)
         start = np.zeros(len(targets) + 1, dtype=np.int64)
         np.cumsum(counts, out=start[1:])
         index = np.empty(start[-1], dtype=np.int32)
-        _fill(targets, *args, start, index)
+        _scan(targets, *args, start, index)
         return NeighbourList(targets, start, index)
 
     def owned_cell_order(self, n_owned):
