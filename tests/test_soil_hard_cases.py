@@ -54,7 +54,8 @@ def test_block_dropped_at_2_m_per_s_onto_the_floor():
 @pytest.mark.xfail(strict=True, reason="the lone toe-tip particle of the stair-stepped 15 deg wedge (dx = 1 cm) slides "
                    "1.4 dx in the first 0.5 s and stops (geostatic K0 stress on a 1-particle step face, thinner than the "
                    "kernel support); the heap body stands since the no-slip image fix (creep < 1 mm, v < 3e-4 m/s at 3 s); "
-                   "see verification/soil_self_weight.py")
+                   "a 0.3 s kinetic-damping settling phase (numerics.settling_time) does not cure it (2.2 dx at 1 cm, 1.3 dx "
+                   "creep at 5 mm); see verification/soil_self_weight.py and verification/results/column_collapse/README.md")
 def test_settled_heap_stays_at_rest_for_10_collapse_times():
     # a 15 deg heap (below phi = 19.8 deg), geostatic start; collapse time of the column ~0.3 s -> 3 s
     heap = {"name": "heap", "material": "bars", "shape": "polygon", "vertices": [[0, 0], [0.3, 0], [0, 0.08]], "geostatic": True}
@@ -69,6 +70,85 @@ def test_settled_heap_stays_at_rest_for_10_collapse_times():
     assert moved.max() < 0.5 * 0.01, moved.max()
     v = ps.owned("v_half")
     assert np.abs(v).max() < 1e-2
+
+
+def _deposit_stays_at_rest(dx):
+    # The settled heap of issue 3: the deposit a collapse leaves, a heap shaped and settled by
+    # its own flow, run on for 10 collapse times. Collapse time t_c: from release until the
+    # kinetic energy falls below 1 % of its peak (the "at rest" definition of
+    # verification/column_collapse.py). Checks (_run_and_check): no NaN, nothing through a wall,
+    # stress within the yield surface; kinetic energy decaying to rest: the mean over the last
+    # third of the long run is not above the first third's, and all of it stays below 1 % of the
+    # collapse's peak; no creep: no particle moves more than dx/2 (the positional resolution of
+    # the particle set) over the 10 t_c.
+    sim = Simulation(scene_at(dx, 1.0))
+    ps = sim.particles
+    samples = np.linspace(0.0, 1.0, 41)[1:]
+    ke = []
+    for t in samples:
+        sim.advance_to(t)
+        n = ps.n_owned
+        ke.append(0.5 * np.sum(ps["mass"][:n] * np.sum(ps["v_half"][:n] ** 2, axis=1)))
+    ke = np.array(ke)
+    peak = ke.max()
+    after_peak = np.arange(len(ke)) > ke.argmax()
+    t_c = float(samples[np.flatnonzero(after_peak & (ke < 0.01 * peak))[0]])
+    n = ps.n_owned
+    x1 = ps["x"][:n][np.argsort(ps["id"][:n])].copy()
+    long_ke = _run_and_check(_Offset(sim, sim.t), 10 * t_c, ke_ratio=1.0)
+    third = len(long_ke) // 3
+    assert np.mean(long_ke[-third:]) <= np.mean(long_ke[:third]), long_ke
+    assert max(long_ke) < 0.01 * peak, (max(long_ke), peak)
+    n = ps.n_owned
+    moved = np.linalg.norm(ps["x"][:n][np.argsort(ps["id"][:n])] - x1, axis=1)
+    assert moved.max() < 0.5 * dx, moved.max() / dx
+
+
+@pytest.mark.slow
+def test_collapse_deposit_stays_at_rest_for_10_collapse_times():
+    # dx = 5 mm (800 particles, ~2.5 min), the coarsest spacing of the resolution study.
+    # Measured (t = 1 -> 4 s): kinetic energy 1.2e-6 -> 1e-7 J/m (peak ~0.8 J/m), largest
+    # displacement 0.33 dx (a bottom-row particle at the old toe), none beyond dx/2.
+    _deposit_stays_at_rest(0.005)
+
+
+@pytest.mark.xfail(strict=True, reason="dx = 1 cm: bottom-row particles pressed to y ~ 0 during the collapse (inside "
+                   "the image layer, where the self-image's repulsion vanishes) chatter vertically at ~3 mm/s, and one "
+                   "slips 3.7 dx at t ~ 5.3 s (kinetic energy 1.3e-4 J/m, 20x the level at 1 s; still < 1 % of the peak)")
+def test_collapse_deposit_ci_size_stays_at_rest_for_10_collapse_times():
+    _deposit_stays_at_rest(0.01)
+
+
+class _Offset:
+    """A Simulation seen with its clock shifted by t0 (for _run_and_check's sample times)."""
+
+    def __init__(self, sim, t0):
+        self._sim, self._t0 = sim, t0
+
+    def advance_to(self, t):
+        self._sim.advance_to(self._t0 + t)
+
+    def __getattr__(self, name):
+        return getattr(self._sim, name)
+
+
+def test_settling_phase_drains_the_start_transient():
+    # numerics.settling_time (kinetic damping, Cundall 1971) as the alternative to a geostatic
+    # start: a 0.30 x 0.05 m layer at dx = 1 cm started from zero stress. Without settling it
+    # releases with the elastic transient of its own weight (kinetic energy ~1e-7 J/m at
+    # 0.05 s); after 0.3 s of settling (~10 periods of the layer's lowest mode, 4 H / c_s ~
+    # 0.02 s) the released layer is at rest to round-off. Bound: 1e-6 of the undamped start's
+    # kinetic energy (six orders: the kinetic-damping resets remove energy geometrically, and
+    # 1e-6 leaves many orders of margin above the measured ~1e-20 ratio without depending on it).
+    def layer(settle):
+        blk = {"name": "layer", "material": "bars", "shape": "rectangle", "min": [0, 0], "max": [0.3, 0.05]}
+        sim = Simulation(scene_at(0.01, 0.2, overrides={"domain": {"max": [0.3, 0.2]}, "walls": {"x_max": "free_slip"},
+                                                       "blocks": [blk], "numerics": {"settling_time": settle}}))
+        return sim, _run_and_check(sim, 0.2, ke_ratio=1.0)
+    plain, ke_plain = layer(0.0)
+    settled, ke_settled = layer(0.3)
+    assert plain.settling is None and settled.settling["resets"] > 0 and settled.t == pytest.approx(0.2)
+    assert max(ke_settled) < 1e-6 * max(ke_plain), (max(ke_settled), max(ke_plain))
 
 
 def test_column_collapse_ci_size_comes_to_rest_inside_yield_surface():
