@@ -21,7 +21,7 @@ DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
-WallKind = Literal["free_slip", "no_slip"]
+WallKind = Literal["free_slip", "no_slip", "frictional"]
 OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
 
 
@@ -50,6 +50,7 @@ class Walls(Strict):
     y_max: WallKind | None = None
     z_min: WallKind | None = None
     z_max: WallKind | None = None
+    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0   # degrees, Coulomb friction of "frictional" walls
 
 
 class Water(Strict):

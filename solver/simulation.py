@@ -19,8 +19,8 @@ from .materials import PHASE_SOIL, PHASE_WATER
 from .neighbors import CellGrid, CellList
 from .parallel.communicator import SerialCommunicator
 from .physics import fluid, soil
-from .physics.boundary import (ImageWalls, add_hydrostatic_image_pressure, refresh_image_scalar, refresh_image_tensor,
-                               refresh_image_vectors)
+from .physics.boundary import (ImageWalls, add_hydrostatic_image_pressure, frictional_images, refresh_image_scalar,
+                               refresh_image_tensor, refresh_image_vectors)
 from .plan import Plan, build_plan
 from .scene import Scene
 from .tensors import SYM_AXES
@@ -177,6 +177,13 @@ class Simulation:
             tensors += ("art_stress",)
         self.comm.refresh_halo(ps, ("mean_stress",) + tensors)
         self.refresh_images(scalars=("mean_stress",), tensors=tensors)
+        if self.walls.frictional and ps.n_image:           # Coulomb walls: stick/slip per image, then its velocity
+            w = self.walls
+            src, sign, offset = w.tables()
+            v_stick = float(np.linalg.norm(self.gravity)) * self.dt_prev if self.dt_prev > 0 else np.inf  # one step of g
+            frictional_images(ps.n_local, src, offset, w.fric_axis, w.fric_side, w.mu, ps["mean_stress"],
+                              ps["stress_dev"], w.vsign, ps["x"], ps["v"], ps["rho"], self.gravity, v_stick)
+            refresh_image_vectors(ps.n_local, src, sign, offset, ps["x"], ps["v"], w.vsign)
 
     def _pass_soil_rates(self, nl):
         ps, mats, opt = self.particles, self.plan.materials, self.plan.options

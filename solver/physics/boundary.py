@@ -9,6 +9,13 @@ No-slip walls (v' = -v, Takeda et al. 1994) keep the image stress unchanged, T' 
 velocity field is odd across the wall, so dv_t/dn and the shear stress it builds are even.
 Reversing the shear stress there (eq. 23) would cancel the wall's shear traction in the
 momentum sum, and soil would slide along a "no-slip" floor (tests/test_soil_walls.py).
+Frictional walls (Coulomb, mu = tan(walls.friction_angle); soil): an image mirrored across one
+frictional wall is a no-slip image while its source sticks, |tau| <= mu sigma_n (shear traction
+tau and compressive normal stress sigma_n of the source on the wall plane), and when it slips the
+tangential velocity is kept (free slip) and the image shear is set to tau' = 2 tau_w - tau, so
+that the pair's mean shear (tau + tau') / 2, the traction the wall exerts, is tau_w, of size
+mu sigma_n and opposing the sliding velocity (frictional_images, after each stress update).
+Sliding goes on until the source's tangential speed falls below what one step of gravity gives.
 Images are chosen when the neighbour lists are rebuilt and refreshed every step.
 """
 
@@ -116,6 +123,57 @@ def refresh_image_tensor(first, src, sign, sym_axes, tensor):
             tensor[i, c] = sa * sb * tensor[j, c]
 
 
+@kernel  # images are a thin layer: a serial loop
+def frictional_images(first, src, offset, fric_axis, fric_side, mu, mean_stress, stress, vsign, x, v, rho, gravity, v_stick):
+    """Stick/slip of images across frictional walls (fric_axis[k] = wall normal axis, -1 = not
+    frictional; fric_side[k] = +1 lower wall, -1 upper): the normal stress at the wall is the
+    source's extrapolated to the wall plane by rho g_n times the distance; updates the image's velocity signs and
+    sets its shear stress (see module doc). Stick: |v_t| <= v_stick and |tau| <= mu sigma_n
+    (no-slip image, T' = T). Slip: the wall's shear traction is mu sigma_n, opposing the sliding
+    velocity (or along tau when slip starts from rest), by tau' = 2 tau_w - tau. Returns the
+    number of slipping images."""
+    dim = vsign.shape[1]
+    slipping = 0
+    for k in range(src.shape[0]):
+        a = fric_axis[k]
+        if a < 0:
+            continue
+        j = src[k]
+        i = first + k
+        # compression positive, extrapolated from the source to the wall plane (offset = 2 x plane)
+        # by the weight of the layer between them, d sigma_n / dn = rho g_n (static equilibrium)
+        sigma_n = max(mean_stress[j] - stress[j, a] + rho[j] * abs(gravity[a]) * abs(x[j, a] - 0.5 * offset[k, a]), 0.0)
+        c1 = 3 if a != 2 else 5                                # shear components on the wall plane
+        c2 = 5 if a == 0 else 4
+        b1 = 1 if a == 0 else 0                                # their tangential axes
+        b2 = 1 if a == 2 else 2
+        t1 = stress[j, c1] if b1 < dim else 0.0
+        t2 = stress[j, c2] if b2 < dim else 0.0
+        u1 = v[j, b1] if b1 < dim else 0.0
+        u2 = v[j, b2] if b2 < dim else 0.0
+        tau = np.sqrt(t1 * t1 + t2 * t2)
+        speed = np.sqrt(u1 * u1 + u2 * u2)
+        limit = mu * sigma_n
+        sliding = speed > v_stick
+        slip = sliding or tau > limit
+        for b in range(dim):
+            if b != a:
+                vsign[k, b] = 1.0 if slip else -1.0
+        if slip:
+            slipping += 1
+            if sliding:                                        # kinetic: oppose the sliding velocity
+                w1 = fric_side[k] * limit * u1 / speed
+                w2 = fric_side[k] * limit * u2 / speed
+            else:                                              # slip starts: along the driving shear
+                w1 = limit * t1 / tau
+                w2 = limit * t2 / tau
+            if b1 < dim:
+                stress[i, c1] = 2.0 * w1 - t1
+            if b2 < dim:
+                stress[i, c2] = 2.0 * w2 - t2
+    return slipping
+
+
 class ImageWalls:
     """The walls of the box, and the current table of image particles."""
 
@@ -128,8 +186,14 @@ class ImageWalls:
         self.offset = np.zeros((0, dim))
         self.any = bool(self.has_lo.any() or self.has_hi.any())
         kinds = [(getattr(scene.walls, f"{ax}_min"), getattr(scene.walls, f"{ax}_max")) for ax in "xyz"[:dim]]
-        self.no_slip_lo = np.array([k[0] == "no_slip" for k in kinds])
-        self.no_slip_hi = np.array([k[1] == "no_slip" for k in kinds])
+        self.no_slip_lo = np.array([k[0] in ("no_slip", "frictional") for k in kinds])   # frictional: no slip while stuck
+        self.no_slip_hi = np.array([k[1] in ("no_slip", "frictional") for k in kinds])
+        self.frictional_lo = np.array([k[0] == "frictional" for k in kinds])
+        self.frictional_hi = np.array([k[1] == "frictional" for k in kinds])
+        self.frictional = bool(self.frictional_lo.any() or self.frictional_hi.any())
+        self.mu = float(np.tan(np.radians(scene.walls.friction_angle)))
+        self.fric_axis = np.zeros(0, dtype=np.int64)
+        self.fric_side = np.zeros(0)
         self.vsign = None
         self.tsign = None
 
@@ -149,6 +213,9 @@ class ImageWalls:
         if self.no_slip_lo.any() or self.no_slip_hi.any():
             self.vsign = _velocity_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
             self.tsign = _tensor_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
+        if self.frictional:
+            self.fric_axis, self.fric_side = _frictional_axes(self.sign[:n], self.offset[:n], self.lo, self.hi,
+                                              self.frictional_lo, self.frictional_hi)
         particles.ensure_capacity(n_local + n)
         particles.n_image = n
 
@@ -205,3 +272,23 @@ def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p):
         for a in range(dim):
             dp += gravity[a] * (x[i, a] - x[j, a])
         p[i] += rho[j] * dp
+
+
+def _frictional_axes(sign, offset, lo, hi, fric_lo, fric_hi):
+    """Per image: the normal axis of the frictional wall it is mirrored across, or -1 (not
+    mirrored across exactly one wall, or that wall is not frictional: corners stay no-slip),
+    and +1 / -1 for a lower / upper wall."""
+    axes = np.full(len(sign), -1, dtype=np.int64)
+    side = np.zeros(len(sign))
+    single = np.sum(sign < 0, axis=1) == 1
+    for a in range(sign.shape[1]):
+        mirrored = single & (sign[:, a] < 0)
+        at_lo = mirrored & (np.abs(offset[:, a] - 2 * lo[a]) <= np.abs(offset[:, a] - 2 * hi[a]))
+        at_hi = mirrored & ~at_lo
+        if fric_lo[a]:
+            axes[at_lo] = a
+            side[at_lo] = 1.0
+        if fric_hi[a]:
+            axes[at_hi] = a
+            side[at_hi] = -1.0
+    return axes, side
