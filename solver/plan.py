@@ -163,8 +163,6 @@ def _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scala
                     Term("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager")]
     options["artificial_stress"] = num.artificial_stress > 0
     if options["artificial_stress"]:
-        if scene.dim != 2:
-            raise NotImplementedError("artificial stress is implemented for 2D (plane strain) only")
         fields["art_stress"] = FieldSpec(N_SYM, np.float64, "artificial stress R (Gray et al. 2001)")
         image_tensors.append("art_stress")
         stress_terms.append(Term("artificial stress", "Gray, Monaghan & Swift (2001)"))

@@ -173,7 +173,7 @@ class Simulation:
         tensors = ("stress_dev",)
         if self.plan.options.get("artificial_stress"):
             soil.artificial_stress(nl.targets, ps["rho"], ps["mean_stress"], ps["stress_dev"],
-                                   self.scene.numerics.artificial_stress, ps["art_stress"])
+                                   self.scene.numerics.artificial_stress, ps["art_stress"], self.scene.dim == 3)
             tensors += ("art_stress",)
         self.comm.refresh_halo(ps, ("mean_stress",) + tensors)
         self.refresh_images(scalars=("mean_stress",), tensors=tensors)

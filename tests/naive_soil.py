@@ -88,10 +88,13 @@ def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55
     return drho, acc, ds
 
 
-def artificial_stress(p, s6, rho, eps):
-    """Gray et al. (2001): R = -eps sum_a max(sigma_a, 0)/rho^2 n_a n_a over the in-plane
-    principal directions, plus the zz (out-of-plane, principal) component."""
+def artificial_stress(p, s6, rho, eps, dim=2):
+    """Gray et al. (2001): R = -eps sum_a max(sigma_a, 0)/rho^2 n_a n_a over the principal
+    directions (numpy's eigh): in 2D the in-plane ones plus zz (out-of-plane, principal)."""
     sig = to_matrix(s6) - p * np.eye(3)
+    if dim == 3:
+        w, vec = np.linalg.eigh(sig)
+        return to_voigt(sum(-eps * max(w[a], 0) / rho**2 * np.outer(vec[:, a], vec[:, a]) for a in range(3)))
     w, vec = np.linalg.eigh(sig[:2, :2])
     R = np.zeros((3, 3))
     for a in range(2):

@@ -192,6 +192,30 @@ def test_soil_stress_state_and_artificial_stress_match_twins(rng):
         np.testing.assert_allclose(art[i], nv.artificial_stress(p[i], s0[i], rho[i], 0.5), rtol=1e-9, atol=1e-16)
 
 
+def test_artificial_stress_in_3d_matches_twin(rng):
+    """3D: the positive part of the full stress by Jacobi rotations against numpy's eigh, on
+    random states with all six components, and on states with repeated principal stresses
+    (isotropic, axisymmetric, zero), where closed-form eigenvectors break down."""
+    from solver.tensors import positive_part
+    n = 64
+    rows = np.arange(n, dtype=np.int64)
+    rho = 2000 * (1 + rng.uniform(-0.02, 0.02, n))
+    s = rng.normal(0, 500, (n, 6))
+    s[:, :3] -= s[:, :3].mean(axis=1, keepdims=True)
+    p = rng.uniform(-2000, 2000, n)
+    s[:3], p[:3] = 0.0, [-700.0, 0.0, 300.0]              # isotropic tension, zero, isotropic compression
+    s[3], p[3] = [200.0, -100.0, -100.0, 0, 0, 0], 0.0     # axisymmetric: two equal principal stresses
+    art = np.zeros((n, 6))
+    soil.artificial_stress(rows, rho, p, s, 0.5, art, True)
+    for i in range(n):
+        np.testing.assert_allclose(art[i], nv.artificial_stress(p[i], s[i], rho[i], 0.5, dim=3), rtol=1e-9,
+                                   atol=1e-12 * 0.5 * np.abs(s[i]).sum() / rho[i] ** 2 + 1e-300)
+    sym = np.array([3.0, 1.0, -2.0, 0.5, -0.7, 1.1])
+    lam, vec = np.linalg.eigh(nv.to_matrix(sym))
+    expected = nv.to_voigt(sum(max(lam[a], 0) * np.outer(vec[:, a], vec[:, a]) for a in range(3)))
+    np.testing.assert_allclose(positive_part(*sym), expected, rtol=1e-12, atol=1e-14)
+
+
 def test_single_shear_elastic_then_plastic_plateau():
     """Simple shear v_x = gamma_dot y at constant p, integrated with the kernel's own
     Hooke-Jaumann rate (soil_rates on a lattice, centre particle) and the return mapping

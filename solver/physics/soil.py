@@ -22,6 +22,7 @@ from numba import prange
 
 from ..config import kernel
 from ..kernels import cubic_spline_dwdr, cubic_spline_w
+from ..tensors import positive_part
 
 YIELD_ELASTIC, YIELD_MOHR_COULOMB, YIELD_DRUCKER_PRAGER = 0, 1, 2
 
@@ -113,10 +114,11 @@ def soil_stress_state(rows, rho, s, material, rho0, bulk, shear, tan_phi, cohesi
 
 
 @kernel(parallel=True)
-def artificial_stress(rows, rho, mean_stress, s, eps, art):
+def artificial_stress(rows, rho, mean_stress, s, eps, art, three=False):
     """Gray, Monaghan & Swift (2001) artificial stress, as used for soil by Bui et al. (2008):
     in the principal frame R'_aa = -eps sigma'_aa / rho^2 where sigma'_aa > 0 (tension), else 0,
-    rotated back. 2D plane strain: the in-plane 2x2 part in closed form, zz is principal."""
+    rotated back. 2D plane strain: the in-plane 2x2 part in closed form, zz is principal;
+    3D: the positive part of the full tensor by Jacobi rotations (tensors.positive_part)."""
     for t in prange(rows.shape[0]):
         i = rows[t]
         p = mean_stress[i]
@@ -125,6 +127,11 @@ def artificial_stress(rows, rho, mean_stress, s, eps, art):
         szz = s[i, 2] - p
         sxy = s[i, 3]
         f = -eps / (rho[i] * rho[i])
+        if three:
+            pos = positive_part(sxx, syy, szz, sxy, s[i, 4], s[i, 5])
+            for k in range(6):
+                art[i, k] = f * pos[k]
+            continue
         theta = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
         c = np.cos(theta)
         sn = np.sin(theta)
