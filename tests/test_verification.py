@@ -3,7 +3,7 @@ sources live in the case modules)."""
 
 import pytest
 
-from verification import dam_break, hydrostatic
+from verification import column_collapse, dam_break, hydrostatic, soil_self_weight
 
 
 @pytest.mark.slow
@@ -68,5 +68,36 @@ def test_hydrostatic_image_pressure_keeps_fine_still_water_at_rest():
     mirror images lack: at H/40 every check of the case passes, with the seed's leap-frog and
     alpha = 0.01 (no reflection at the floor, spurious Mach < 0.01, gauge pressure within h/H)."""
     res = hydrostatic.run(40, **{"numerics.image_pressure": "hydrostatic"})
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)
+
+
+@pytest.mark.slow
+def test_column_collapse_matches_experiment_at_ci_resolution(tmp_path):
+    """dx = 5 mm, the coarsest spacing of the committed resolution study (its tolerances carry
+    that spacing's discretisation error; column_collapse module docstring)."""
+    res = column_collapse.run(20, out_dir=tmp_path)
+    assert res.figure.is_file()
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="known discrepancy: the SPH undisturbed-zone boundary lies ~1 cm from the "
+                   "experiment's failure line at 4 and 2.5 mm (RMS 11.5 / 11.9 mm against 7.9 mm); the SPH shear band "
+                   "is ~4 cm wide at every displacement or strain threshold and artificial viscosity does not change it "
+                   "(verification/results/column_collapse/README.md); kept visible until the model resolves it")
+def test_column_collapse_failure_line_at_4mm():
+    res = column_collapse.run(25)
+    check = next(c for c in res.checks if c.metric.startswith("failure-line"))
+    assert check.passed, check.line()
+
+
+@pytest.mark.slow
+def test_soil_self_weight_matches_1d_solution_and_slope_stands(tmp_path):
+    """Confined elastic column against the constrained-modulus solution, and a 15 deg heap
+    (below phi = 19.8 deg) that must stand, at dx = 5 mm (the study's finest)."""
+    res = soil_self_weight.run(soil_self_weight.DEFAULT_RESOLUTION, out_dir=tmp_path)
+    assert res.figure.is_file()
     failed = [c.line() for c in res.checks if not c.passed]
     assert not failed, "\n".join(failed)

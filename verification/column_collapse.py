@@ -11,9 +11,16 @@ failure line.
 
 Tolerances (`checks`): the data's digitisation uncertainty, +/- 3 mm (CSV header), plus this
 resolution's discretisation error from the committed resolution study
-(verification/results/column_collapse/resolution_study.csv): |metric(dx) - metric(finest)|,
-and for the finest spacing its difference to the next coarser one (the study shows the
-metrics converging monotonically, so that is an upper estimate). No other margin.
+(verification/results/column_collapse/resolution_study.csv). No other margin.
+  - runout: the study's three spacings converge monotonically, so the error at dx is estimated
+    against the Richardson limit, GCI_SAFETY |R(dx) - R_0| with R(dx) = R_0 + C dx^p (observed
+    order p; Roache 1998 three-grid GCI, Celik et al. 2008). The difference to the finest run,
+    used before, is a lower bound of that error for a monotone sequence, not an upper one.
+  - the other metrics: |metric(dx) - metric(finest)|, and for the finest spacing its difference
+    to the next coarser one (height at the wall and profile change by less than the
+    digitisation between spacings; the failure line is not monotone, so no extrapolation).
+The extrapolated runout R_0 against the experiment is reported as a note: it is the model's
+error once the discretisation error is gone.
 
 Observables:
   - runout: front of the contiguous deposit: particles beyond the first gap wider than 2 dx
@@ -37,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import RESULTS, CaseResult, Check, study_row, timed_samples
+from .common import GCI_SAFETY, RESULTS, CaseResult, Check, richardson, study_row, timed_samples
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
@@ -162,6 +169,11 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     res.notes = [f"dx = {dx * 1000:g} mm, runout {series['runout']:.4f} m (experiment {ref['final_free_surface'][-1, 0]:.3f} m), "
                  f"height at wall {series['wall_height']:.4f} m (experiment {ref['final_free_surface'][0, 1]:.3f} m), "
                  f"farthest particle {x[:, 0].max() + 0.5 * dx:.4f} m"]
+    fit = extrapolated_runout()
+    if fit is not None:
+        res.notes.append(f"resolution study: runout converges with observed order {fit[0]:.2f} to {fit[1]:.4f} m "
+                         f"(Richardson), {100 * (fit[1] / float(ref['final_free_surface'][-1, 0]) - 1):+.1f} % from the "
+                         f"experiment: the model error once the discretisation error is gone")
     dem = liggghts_reference()
     if dem is not None:
         res.notes.append(f"vs LIGGGHTS DEM ({dem['label']}): runout {series['runout'] - dem['runout']:+.4f} m "
@@ -206,18 +218,42 @@ def errors(series, ref):
 
 
 def discretization_error(resolution):
-    """{metric: error} from the committed resolution study, or None if not on file."""
+    """{metric: error} from the committed resolution study, or None if not on file. The runout
+    uses the Richardson estimate (GCI) when the study could extrapolate it (module docstring)."""
     r = study_row(STUDY_FILE, resolution)
     if r is None:
         return None
-    return {m: float(r[f"{m}_vs_finest"]) for m in METRICS}
+    err = {m: float(r[f"{m}_vs_finest"]) for m in METRICS}
+    if r.get("runout_vs_extrapolated"):
+        err["runout"] = GCI_SAFETY * float(r["runout_vs_extrapolated"])
+    return err
+
+
+def extrapolated_runout():
+    """(order p, R_0) of the committed study's runouts, or None."""
+    r = study_row(STUDY_FILE, STUDY_RESOLUTIONS[-1])
+    if r is None or not r.get("runout_extrapolated_m"):
+        return None
+    return float(r["runout_order"]), float(r["runout_extrapolated_m"])
+
+
+def add_runout_extrapolation(rows):
+    """Richardson order and limit of the runout over the study rows, and each row's distance to
+    the limit (the runout's discretisation error); blank where no extrapolation is defensible."""
+    fit = richardson([r["spacing_mm"] for r in rows], [float(r["runout_m"]) for r in rows]) if len(rows) == 3 else None
+    for r in rows:
+        r["runout_order"] = fit[0] if fit else ""
+        r["runout_extrapolated_m"] = fit[1] if fit else ""
+        r["runout_vs_extrapolated"] = abs(float(r["runout_m"]) - fit[1]) if fit else ""
+    return rows
 
 
 def checks(res, ref=None):
     s = res.series
     disc = discretization_error(res.resolution)
     d = disc or dict.fromkeys(METRICS, 0.0)
-    note = (lambda m: f" + discretisation error {d[m] * 1000:.1f} mm (resolution study)") if disc else \
+    how = {"runout": f"resolution study, Richardson limit x GCI safety {GCI_SAFETY}"}
+    note = (lambda m: f" + discretisation error {d[m] * 1000:.1f} mm ({how.get(m, 'resolution study')})") if disc else \
         (lambda m: " (no resolution study on file for this resolution: digitisation only)")
     dig = "digitisation +/- 3 mm (CSV header)"
     return [
@@ -266,6 +302,16 @@ def figure(res, ref, path):
     return path
 
 
+def extrapolation_text(rows, experiment):
+    if rows[0]["runout_order"] == "":
+        return "Runout: no Richardson extrapolation (the three runouts are not monotone in dx).\n\n"
+    p, r0 = float(rows[0]["runout_order"]), float(rows[0]["runout_extrapolated_m"])
+    return (f"Runout: observed order p = {p:.2f}; Richardson limit R_0 = {r0:.4f} m, {100 * (r0 / experiment - 1):+.1f} % "
+            f"from the experiment ({experiment:.3f} m); distance to R_0: "
+            + ", ".join(f"{1000 * float(r['runout_vs_extrapolated']):.1f} mm at {float(r['spacing_mm']):g} mm" for r in rows)
+            + ".\n\n")
+
+
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     """Resolution study: metrics, their differences to the finest run (the discretisation
     errors the checks read) and wall time side by side; writes CSV + Markdown."""
@@ -294,6 +340,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                      "runout_error_pct": 100 * s["runout_error"] / float(surf[-1, 0]), "wall_height_m": s["wall_height"],
                      "profile_rms_mm": 1000 * s["profile_rms"], "failure_rms_mm": 1000 * s["failure_rms"],
                      **{f"{m}_vs_finest": d[m] for m in METRICS}})
+    add_runout_extrapolation(rows)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "resolution_study.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -316,8 +363,10 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
             f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, on a 2-core machine shared with other jobs.\n"
             "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse --study`\n\n"
             + "\n".join(lines) + "\n\n"
+            + extrapolation_text(rows, float(surf[-1, 0])) +
             "'vs finest' columns (CSV) are the discretisation errors the checks add to the 3 mm digitisation "
-            "uncertainty; for the finest run, its difference to the next coarser one.\n\nChecks:\n" + "\n".join(verdicts) + "\n")
+            "uncertainty; for the finest run, its difference to the next coarser one. The runout uses "
+            f"{GCI_SAFETY} x its distance to the Richardson limit instead (module docstring).\n\nChecks:\n" + "\n".join(verdicts) + "\n")
     (out / "resolution_study.md").write_text(text)
     print(text)
     return rows

@@ -126,6 +126,36 @@ def study_row(path, resolution):
     return rows.get(resolution)
 
 
+GCI_SAFETY = 1.25      # Roache (1998), "Verification and Validation in Computational Science and Engineering": three-grid GCI
+
+
+def richardson(spacings, values, orders=(0.5, 4.0)):
+    """Observed order p and extrapolated limit f0 of f(dx) = f0 + C dx^p from three spacings
+    (any refinement ratios; Celik et al. 2008, J. Fluids Eng. 130:078001, eqs. 3-4, solved here
+    by bisection). None if the three values are not monotone in dx or p falls outside `orders`
+    (then the sequence is not in its asymptotic range and no extrapolation is defensible)."""
+    (h1, f1), (h2, f2), (h3, f3) = sorted(zip(spacings, values), reverse=True)     # coarse to fine
+    d12, d23 = f1 - f2, f2 - f3
+    if d12 == 0.0 or d23 == 0.0 or (d12 > 0) != (d23 > 0):
+        return None
+    target = d12 / d23
+
+    def ratio(p):
+        return (h1 ** p - h2 ** p) / (h2 ** p - h3 ** p)
+    lo, hi = orders
+    if not min(ratio(lo), ratio(hi)) <= target <= max(ratio(lo), ratio(hi)):
+        return None
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if (ratio(mid) - target) * (ratio(lo) - target) > 0:
+            lo = mid
+        else:
+            hi = mid
+    p = 0.5 * (lo + hi)
+    f0 = f3 - d23 * h3 ** p / (h2 ** p - h3 ** p)
+    return p, f0
+
+
 def save_figure(fig, path, dpi=120):
     import matplotlib.pyplot as plt
     path = Path(path)
