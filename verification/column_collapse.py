@@ -108,7 +108,7 @@ def failure_line(x0, x, dx, threshold):
     (the undisturbed zone of Bui et al. 2008), + dx/2; returned sorted by height."""
     moved = np.linalg.norm(x - x0, axis=1)
     still = moved < threshold
-    rows = np.round(x0[:, 1] / dx).astype(int)
+    rows = np.floor(x0[:, 1] / dx).astype(int)            # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
     ys, xs = [], []
     for r in np.unique(rows):
         sel = still & (rows == r)

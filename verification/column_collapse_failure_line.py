@@ -42,7 +42,7 @@ def boundary(x0, x, dx, threshold, initial=False):
     (or initial) position, + dx/2; sorted by height."""
     moved = np.linalg.norm(x - x0, axis=1)
     pos = x0 if initial else x
-    rows = np.round(x0[:, 1] / dx).astype(int)
+    rows = np.floor(x0[:, 1] / dx).astype(int)            # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
     xs, ys = [], []
     for r in np.unique(rows):
         sel = (moved < threshold) & (rows == r)
