@@ -84,7 +84,7 @@ def test_column_collapse_matches_experiment_at_ci_resolution(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="known discrepancy: the SPH undisturbed-zone boundary lies ~1 cm from the "
-                   "experiment's failure line at 4 and 2.5 mm (RMS 11.5 / 11.9 mm against 7.9 mm); the SPH shear band "
+                   "experiment's failure line at 4 and 2.5 mm (RMS 10.6 / 11.7 mm against 7.0 mm); the SPH shear band "
                    "is ~4 cm wide at every displacement or strain threshold and artificial viscosity does not change it "
                    "(verification/results/column_collapse/README.md); kept visible until the model resolves it")
 def test_column_collapse_failure_line_at_4mm():
