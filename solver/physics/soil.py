@@ -189,6 +189,10 @@ def soil_rates(
         q12 = s[i, 4] * ri2
         q02 = s[i, 5] * ri2
         mi = material[i]
+        quiet_i = True                                      # R_i = 0 (no tension): the common case, see below
+        if art is not None:
+            quiet_i = (art[i, 0] == 0.0 and art[i, 1] == 0.0 and art[i, 2] == 0.0
+                       and art[i, 3] == 0.0 and art[i, 4] == 0.0 and art[i, 5] == 0.0)
         d_rho = 0.0
         a0 = a1 = a2 = 0.0
         g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
@@ -220,17 +224,22 @@ def soil_rates(
                 alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
                 beta = 0.5 * (av_beta[mi] + av_beta[mj])
                 diag -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
+            fn = 0.0
             if art is not None:                             # Gray et al. (2001): + f^n (R_i + R_j)
-                fn = (cubic_spline_w(r, h, norm) * inv_w_dx) ** art_n
-                t00 += fn * (art[i, 0] + art[j, 0])
-                t11 += fn * (art[i, 1] + art[j, 1])
-                t01 += fn * (art[i, 3] + art[j, 3])
+                # skipped when R_i = R_j = 0 (both particles in compression), where it adds exactly
+                # zero: the kernel value and the power f^n were 60 % of a cohesionless soil step
+                if not (quiet_i and art[j, 0] == 0.0 and art[j, 1] == 0.0 and art[j, 2] == 0.0
+                        and art[j, 3] == 0.0 and art[j, 4] == 0.0 and art[j, 5] == 0.0):
+                    fn = (cubic_spline_w(r, h, norm) * inv_w_dx) ** art_n
+                    t00 += fn * (art[i, 0] + art[j, 0])
+                    t11 += fn * (art[i, 1] + art[j, 1])
+                    t01 += fn * (art[i, 3] + art[j, 3])
             fm = m_j * fr
             if three:
                 t22 = q22 + (s[j, 2] - pj) * rj2
                 t12 = q12 + s[j, 4] * rj2
                 t02 = q02 + s[j, 5] * rj2
-                if art is not None:
+                if art is not None and fn != 0.0:
                     t22 += fn * (art[i, 2] + art[j, 2])
                     t12 += fn * (art[i, 4] + art[j, 4])
                     t02 += fn * (art[i, 5] + art[j, 5])
