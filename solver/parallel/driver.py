@@ -62,7 +62,8 @@ def main(argv=None):
     cpu = time.process_time() - c0               # this rank's CPU time (all its threads)
     comm.barrier()
     wall = time.perf_counter() - t0
-    names = [n for n in ("x", "v", "rho", "mass", "material", "id", "v_half", "rho_half") if n in sim.particles]
+    names = [n for n in ("x", "v", "rho", "mass", "material", "id", "v_half", "rho_half", "mean_stress", "stress_dev",
+                         "stress_dev_half", "eps_vp") if n in sim.particles]
     state = comm.gather_owned(sim.particles, names)
     report = comm.report()
     cpus = [cpu] if not report else [None] * len(report)
