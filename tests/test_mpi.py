@@ -93,12 +93,13 @@ def roundoff_tolerances(state, stats, spacing=SPACING, rho0=1000.0, c=15.0, p_ma
     dx = spacing
     h = 1.3 * dx
     radius = 2.25 * h                       # 2h + skin (0.25 h)
-    k = math.ceil(math.pi * (radius / dx) ** 2)
+    dim = state["x"].shape[1]
+    k = math.ceil((math.pi if dim == 2 else 4.0 * math.pi / 3.0) * (radius / dx) ** dim)
     gamma = k * u / (1 - k * u)
-    norm = cubic_spline_normalisation(2, h)
-    i = np.arange(-3, 4)
-    r = np.hypot(*np.meshgrid(i * dx, i * dx))
-    G = sum(dx * dx * abs(float(cubic_spline_dwdr(float(rr), h, norm))) for rr in r.ravel() if 0 < rr < 2 * h)
+    norm = cubic_spline_normalisation(dim, h)
+    i = np.arange(-3, 4) * dx
+    r = np.sqrt(sum(q ** 2 for q in np.meshgrid(*[i] * dim)))
+    G = sum(dx ** dim * abs(float(cubic_spline_dwdr(float(rr), h, norm))) for rr in r.ravel() if 0 < rr < 2 * h)
     v_max = float(np.max(np.linalg.norm(state["v"], axis=1))) + 1e-3
     da = 2 * gamma * (2 * p_max / rho0 + 2 * alpha * c * v_max) * G
     dD = 2 * gamma * rho0 * 2 * v_max * G
@@ -292,3 +293,76 @@ def test_mpi_soil_collapse_equals_serial(tmp_path):
                            ("stress_dev", np.abs(m["stress_dev"] - s["stress_dev"]).max(), rho0 * c * tol_v),
                            ("mean_stress", np.abs(m["mean_stress"] - s["mean_stress"]).max(), rho0 * c * tol_v)):
         assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g}"
+
+
+SLAB_3D = """
+[scene]
+name = "slab_3d"
+dimension = 3
+spacing = 0.01
+end_time = 1.0
+gravity = [0.0, 0.0, -9.81]
+
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.3, 0.08, 0.15]
+
+[walls]
+x_min = "free_slip"
+x_max = "free_slip"
+y_min = "free_slip"
+y_max = "free_slip"
+z_min = "no_slip"
+
+[materials.bars]
+model = "soil"
+density = 2650.0
+youngs_modulus = 0.84e6
+poisson_ratio = 0.3
+friction_angle = 19.8
+cohesion = 200.0
+yield_model = "drucker_prager"
+
+[numerics]
+artificial_stress = 0.5
+
+[[blocks]]
+name = "column"
+material = "bars"
+shape = "rectangle"
+min = [0.0, 0.0, 0.0]
+max = [0.1, 0.08, 0.1]
+geostatic = true
+"""
+
+
+def test_mpi_3d_soil_equals_serial(tmp_path):
+    """3D under MPI: a cohesive soil column (800 particles, artificial stress) collapsing in a
+    3D box, 300 steps on 2 and 3 ranks (recut every 25 steps, so the bisection also cuts along
+    y and z) against serial, to the round-off bounds of roundoff_tolerances (3D neighbour count
+    and kernel sum)."""
+    scene = tmp_path / "slab_3d.toml"
+    scene.write_text(SLAB_3D)
+    sets = ["parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0"]
+
+    def run(ranks):
+        state, stats = tmp_path / f"s{ranks}.npz", tmp_path / f"s{ranks}.json"
+        cmd = [sys.executable, "-m", "solver.parallel.driver", str(scene), "--steps", "300", "--threads", "1",
+               "--state", str(state), "--stats", str(stats)] + [a for o in sets for a in ("--set", o)]
+        r = _run(cmd, ranks=None if ranks == 1 else ranks, timeout=300)
+        assert r.returncode == 0, r.stderr[-3000:]
+        return dict(np.load(state)), json.loads(stats.read_text())
+
+    s, s_stats = run(1)
+    assert s["x"].shape[1] == 3 and np.abs(s["v"]).max() > 0.05       # 3D, and flowing
+    rho0, e, nu = 2650.0, 0.84e6, 0.3
+    c = float(np.sqrt((e / (3 * (1 - 2 * nu)) + 4 * e / (2 * (1 + nu)) / 3) / rho0))
+    sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
+    tol_x, tol_v, tol_rho = roundoff_tolerances(s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0)
+    for ranks in (2, 3):
+        m, m_stats = run(ranks)
+        np.testing.assert_array_equal(m["id"], s["id"])
+        assert float(m["t"]) == float(s["t"]) and sorted(np.unique(m["rank"]).tolist()) == list(range(ranks))
+        for name, err, tol in (("x", np.abs(m["x"] - s["x"]).max(), tol_x), ("v", np.abs(m["v"] - s["v"]).max(), tol_v),
+                               ("stress_dev", np.abs(m["stress_dev"] - s["stress_dev"]).max(), rho0 * c * tol_v)):
+            assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g} (ranks = {ranks})"
