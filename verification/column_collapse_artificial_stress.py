@@ -91,8 +91,13 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    from solver.errors import BlowUpError
     for eps in args.eps:
-        r = run_case(args.resolution, eps, args.cohesion)
+        try:
+            r = run_case(args.resolution, eps, args.cohesion)
+        except BlowUpError as err:            # a result of this study (the remedy off), not a crash of it
+            print(f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: BLOW-UP: {err}", flush=True)
+            continue
         tag = "" if args.cohesion is None else f"_c{args.cohesion:g}"
         np.savez(out / f"positions_r{args.resolution}_eps{eps:g}{tag}.npz", x0=r["x0"], x=r["x"], dx=r["dx"])
         print(f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: runout {r['runout']:.4f} m, wall height {r['wall_height']:.4f} m, "
