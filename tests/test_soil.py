@@ -153,6 +153,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art):
     art = rng.normal(0, 1e-4, (n, 6)) if with_art else None
     if with_art:
         art[:, 4:] = 0.0
+        art[rng.random(n) < 0.5] = 0.0                  # compressed particles (R = 0): the kernel skips pairs of two
     mat = np.zeros(n, dtype=np.int32)
     c = np.array([20.0])
     av = np.array([1.0]) if with_av else None
