@@ -147,6 +147,7 @@ def _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scala
     """Soil terms (seed sec. 2.2, 2.4; Bui et al. 2008): present only with a soil material."""
     num = scene.numerics
     soil_ids = mats.ids_of_phase(PHASE_SOIL)
+    options["equilibrium_soil_images"] = num.image_pressure == "hydrostatic" and bool(soil_ids)
     options["soil"] = True
     fields["stress_dev"] = FieldSpec(N_SYM, np.float64, "soil deviatoric stress s at step n (eqs. 12-13)")
     fields["stress_dev_half"] = FieldSpec(N_SYM, np.float64, "leap-frog s at n+1/2 (eq. 27)")
@@ -214,10 +215,13 @@ def explain(plan: Plan, scene: Scene) -> str:
                  + ", ".join(plan.image_scalars) + ("; tensors " + ", ".join(plan.image_tensors) if plan.image_tensors else ""))
     if plan.options.get("hydrostatic_images"):
         lines.append("  image pressure: source pressure + rho g . (x_image - x_source) (numerics.image_pressure = hydrostatic)")
+    if plan.options.get("equilibrium_soil_images"):
+        lines.append("  soil image stress: source stress + static increment rho g . (x_image - x_source) of the normal "
+                     "stress along gravity (numerics.image_pressure = hydrostatic)")
     lines.append("Halo exchange (MPI):")
     for when, names in plan.halo_fields.items():
         lines.append(f"  {when}: {', '.join(names)}")
-    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic", "hydrostatic"))]
+    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic", "hydrostatic", "equilibrium"))]
     if absent:
         lines.append("")
         lines.append("Not in this plan (not compiled, allocated or run): " + ", ".join(absent)

@@ -19,7 +19,7 @@ from .materials import PHASE_SOIL, PHASE_WATER
 from .neighbors import CellGrid, CellList
 from .parallel.communicator import SerialCommunicator
 from .physics import fluid, soil
-from .physics.boundary import (ImageWalls, add_hydrostatic_image_pressure, frictional_images, refresh_image_scalar,
+from .physics.boundary import (ImageWalls, add_equilibrium_image_stress, add_hydrostatic_image_pressure, frictional_images, refresh_image_scalar,
                                refresh_image_tensor, refresh_image_vectors)
 from .plan import Plan, build_plan
 from .scene import Scene
@@ -177,6 +177,9 @@ class Simulation:
             tensors += ("art_stress",)
         self.comm.refresh_halo(ps, ("mean_stress",) + tensors)
         self.refresh_images(scalars=("mean_stress",), tensors=tensors)
+        if self.plan.options.get("equilibrium_soil_images") and ps.n_image:
+            add_equilibrium_image_stress(ps.n_local, self.walls.tables()[0], ps["x"], ps["rho"], self.gravity,
+                                         ps["mean_stress"], ps["stress_dev"])
         if self.walls.frictional and ps.n_image:           # Coulomb walls: stick/slip per image, then its velocity
             w = self.walls
             src, sign, offset = w.tables()

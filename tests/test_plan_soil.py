@@ -26,6 +26,15 @@ def test_soil_only_plan_has_no_water_term_or_field():
     assert not any(f in sim.particles for f in WATER_FIELDS)
 
 
+def test_equilibrium_image_stress_option_is_planned_for_soil_only_and_explained():
+    from solver.plan import explain
+    scene = small_collapse(overrides={"numerics": {"image_pressure": "hydrostatic"}})
+    on = build_plan(scene)
+    assert on.options["equilibrium_soil_images"] and not on.options["hydrostatic_images"]   # no water here
+    assert not build_plan(small_collapse()).options["equilibrium_soil_images"]
+    assert "soil image stress: source stress + static increment" in explain(on, scene)
+
+
 def test_artificial_stress_off_removes_field_and_term():
     plan = build_plan(small_collapse(overrides={"numerics": {"artificial_stress": 0.0}}))
     assert "art_stress" not in plan.fields and plan.image_tensors == ("stress_dev",)

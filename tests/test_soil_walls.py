@@ -147,3 +147,52 @@ def test_frictional_floor_limits_free_slip_and_tilted_sliding_acceleration():
     a = 2.0 * (d[1] - d[0]) / (0.3 ** 2 - 0.2 ** 2)
     expected = 9.81 * (np.sin(np.radians(10.0)) - np.tan(np.radians(5.0)) * np.cos(np.radians(10.0)))
     assert abs(a - expected) <= 0.05 * expected, (a, expected)
+
+
+def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floor():
+    """numerics.image_pressure = "hydrostatic" for soil (add_equilibrium_image_stress): in a
+    geostatic layer sigma_v = -rho g d (depth d), the image of a particle at height y sits at -y,
+    a depth 2y deeper, so its vertical stress must be the source's minus rho g 2y, and its other
+    normal stresses and shear unchanged (a uniaxial increment along gravity); side-wall images
+    (same height) get nothing. Checked against a NumPy evaluation of the same formula and
+    against the geostatic column's own vertical stress gradient."""
+    from solver.physics.boundary import add_equilibrium_image_stress
+    sc = _layer_scene(0.0, {"x_min": "free_slip", "y_min": "no_slip"},
+                      [{"name": "b", "material": "bars", "shape": "rectangle", "min": [0, 0], "max": [0.1, 0.05],
+                        "geostatic": True}])
+    sim = Simulation(sc)
+    sim.compute_rates()                  # mean stress from the geostatic density (eq. 17), mirror images (seed default)
+    ps = sim.particles
+    n = ps.n_local
+    src, sign, _ = sim.walls.tables()
+    rows = slice(n, n + len(src))
+    sigma_before = ps["stress_dev"][rows, :3] - ps["mean_stress"][rows, None]
+    shear_before = ps["stress_dev"][rows, 3].copy()
+    add_equilibrium_image_stress(n, src, ps["x"], ps["rho"], sim.gravity, ps["mean_stress"], ps["stress_dev"])
+    sigma_after = ps["stress_dev"][rows, :3] - ps["mean_stress"][rows, None]
+    drop = ps["rho"][src] * 9.81 * (ps["x"][src, 1] - ps["x"][rows, 1])      # rho g (y_source - y_image)
+    np.testing.assert_allclose(sigma_after[:, 1] - sigma_before[:, 1], -drop, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(sigma_after[:, [0, 2]], sigma_before[:, [0, 2]], rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(ps["stress_dev"][rows, 3], shear_before)
+    left = (sign[:, 0] < 0) & (sign[:, 1] > 0)
+    assert left.any() and np.all(drop[left] == 0.0)                         # side wall: unchanged
+    # the floor image's vertical stress continues the geostatic profile of its own column
+    floor = (sign[:, 0] > 0) & (sign[:, 1] < 0)
+    rho_g_top = ps["rho"][src[floor]] * 9.81 * (0.05 - ps["x"][n:][:len(src)][floor, 1])
+    np.testing.assert_allclose(-sigma_after[floor, 1], rho_g_top, rtol=2e-3)   # rho varies by p/K ~ 1e-3 in depth
+
+
+def test_equilibrium_image_stress_holds_the_ci_size_collapse_deposit_at_rest():
+    """The control for test_soil_hard_cases::test_collapse_deposit_ci_size_stays_at_rest (strict
+    xfail with the seed's mirror images): with the equilibrium image stress the 1 cm deposit's
+    bottom row is pushed back out of the image layer and the deposit stays at rest for 10
+    collapse times (same checks)."""
+    import test_soil_hard_cases as hard
+    from verification import column_collapse as cc
+    original = hard.scene_at
+    hard.scene_at = lambda dx, end_time=None, overrides=None: cc.scene_at(
+        dx, end_time, overrides={"numerics": {"image_pressure": "hydrostatic"}})
+    try:
+        hard._deposit_stays_at_rest(0.01)
+    finally:
+        hard.scene_at = original

@@ -274,6 +274,41 @@ def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p):
         p[i] += rho[j] * dp
 
 
+@kernel  # images are a thin layer: a serial loop
+def add_equilibrium_image_stress(first, src, x, rho, gravity, mean_stress, stress):
+    """The soil analogue of add_hydrostatic_image_pressure (numerics.image_pressure =
+    "hydrostatic"): the image's stress is its source's plus the static increment of the normal
+    stress along gravity, sigma' = sigma - q g^ g^ with q = rho_source g . (x_image - x_source)
+    (compression positive: static equilibrium d sigma_vv / dv = rho g along the vertical v). An
+    image below its source is then more compressed than it, as the soil below a floor would
+    be, so a particle pressed into the image layer is pushed back, where the mirror image
+    alone (seed eq. 23) leaves it in neutral equilibrium at the wall. As p and s:
+    dp = q / 3, ds = -q (g^ g^ - I / 3). Side walls: g . dx = 0, no change."""
+    dim = x.shape[1]
+    g2 = 0.0
+    for a in range(dim):
+        g2 += gravity[a] * gravity[a]
+    if g2 == 0.0:
+        return
+    gn = np.zeros(3)
+    for a in range(dim):
+        gn[a] = gravity[a] / np.sqrt(g2)
+    for k in range(src.shape[0]):
+        i = first + k
+        j = src[k]
+        gdx = 0.0
+        for a in range(dim):
+            gdx += gravity[a] * (x[i, a] - x[j, a])
+        q = rho[j] * gdx
+        mean_stress[i] += q / 3.0
+        stress[i, 0] -= q * (gn[0] * gn[0] - 1.0 / 3.0)
+        stress[i, 1] -= q * (gn[1] * gn[1] - 1.0 / 3.0)
+        stress[i, 2] -= q * (gn[2] * gn[2] - 1.0 / 3.0)
+        stress[i, 3] -= q * gn[0] * gn[1]
+        stress[i, 4] -= q * gn[1] * gn[2]
+        stress[i, 5] -= q * gn[0] * gn[2]
+
+
 def _frictional_axes(sign, offset, lo, hi, fric_lo, fric_hi):
     """Per image: the normal axis of the frictional wall it is mirrored across, or -1 (not
     mirrored across exactly one wall, or that wall is not frictional: corners stay no-slip),
