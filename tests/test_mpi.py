@@ -258,14 +258,16 @@ def test_ranks_share_the_cores_by_default(tmp_path):
         assert int(f.attrs["threads_per_rank"]) == max(1, (os.cpu_count() or 1) // 2)
 
 
-def test_mpi_soil_collapse_equals_serial(tmp_path):
+@pytest.mark.parametrize("image_pressure", ["mirror", "hydrostatic"])
+def test_mpi_soil_collapse_equals_serial(tmp_path, image_pressure):
     """Soil under MPI (issues 3 and 4): the Bui et al. (2008) column collapse at dx = 5 mm, 600
     steps (0.047 s, the column already flowing at up to 0.45 m/s), recut every 25 steps: stress
     halos, stress images across the rank cut, the return mapping and the artificial stress give
     the serial answer to round-off (measured 2e-16 m, 2e-14 m/s; bounds from
     roundoff_tolerances with the soil's stress scale and wave speed)."""
     collapse = ROOT / "scenes" / "column_collapse_2d.toml"
-    sets = ["scene.spacing=0.005", "parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0"]
+    sets = ["scene.spacing=0.005", "parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0",
+            f'numerics.image_pressure="{image_pressure}"']      # seed mirror images, or the equilibrium image stress
 
     def run(ranks):
         state, stats = tmp_path / f"soil{ranks}.npz", tmp_path / f"soil{ranks}.json"
