@@ -14,23 +14,14 @@ import numba
 import numpy as np
 import pytest
 
+from dam_break_setup import disordered
 from solver.simulation import Simulation
 from verification.column_collapse import L0, H0, scene_at
 
 
 def soil_collapse(n_particles):
     dx = float(np.sqrt(L0 * H0 / n_particles))
-    sim = Simulation(scene_at(dx))
-    rng = np.random.default_rng(1)
-    ps = sim.particles
-    n = ps.n_owned
-    ps["x"][:n] += rng.uniform(-0.15, 0.15, (n, 2)) * dx
-    ps["x"][:n] = np.clip(ps["x"][:n], 0.01 * dx, None)
-    ps["v_half"][:n] = rng.normal(0, 0.05, (n, 2))
-    ps["v"][:n] = ps["v_half"][:n]
-    sim.rebuild()
-    sim.step()
-    return sim
+    return disordered(Simulation(scene_at(dx)))
 
 
 @pytest.mark.parametrize("threads", [1, 2])

@@ -14,7 +14,13 @@ A = 0.05715
 def dam_break(n_particles, **overrides):
     per_a = int(round(np.sqrt(n_particles / 2)))
     sim = Simulation(scene_from_file("dam_break_2d.toml", **{"scene.spacing": A / per_a, **overrides}))
-    rng = np.random.default_rng(1)
+    return disordered(sim)
+
+
+def disordered(sim, seed=1):
+    """Jitter positions by +-0.15 dx (kept inside the lower walls) and give random velocities,
+    then rebuild the lists and take one step: the state a benchmark times."""
+    rng = np.random.default_rng(seed)
     ps = sim.particles
     n = ps.n_owned
     dx = sim.scene.scene.spacing

@@ -46,11 +46,12 @@ def _run(cmd, ranks=None, timeout=TIMEOUT, cwd=None):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=cwd)
 
 
-def _driver(tmp, ranks, extra=()):
+def _driver(tmp, ranks, extra=(), scene=SCENE, steps=STEPS, overrides=OVERRIDES, timeout=TIMEOUT):
+    """Run solver.parallel.driver serially (ranks = 1) or under mpirun; its gathered state and stats."""
     state, stats = tmp / f"state{ranks}.npz", tmp / f"stats{ranks}.json"
-    cmd = [sys.executable, "-m", "solver.parallel.driver", str(SCENE), "--steps", str(STEPS), "--threads", "1",
-           "--state", str(state), "--stats", str(stats)] + [a for o in (*OVERRIDES, *extra) for a in ("--set", o)]
-    r = _run(cmd, ranks=None if ranks == 1 else ranks)
+    cmd = [sys.executable, "-m", "solver.parallel.driver", str(scene), "--steps", str(steps), "--threads", "1",
+           "--state", str(state), "--stats", str(stats)] + [a for o in (*overrides, *extra) for a in ("--set", o)]
+    r = _run(cmd, ranks=None if ranks == 1 else ranks, timeout=timeout)
     assert r.returncode == 0, r.stderr[-3000:]
     return dict(np.load(state)), json.loads(stats.read_text())
 
@@ -270,12 +271,7 @@ def test_mpi_soil_collapse_equals_serial(tmp_path, image_pressure):
             f'numerics.image_pressure="{image_pressure}"']      # seed mirror images, or the equilibrium image stress
 
     def run(ranks):
-        state, stats = tmp_path / f"soil{ranks}.npz", tmp_path / f"soil{ranks}.json"
-        cmd = [sys.executable, "-m", "solver.parallel.driver", str(collapse), "--steps", "600", "--threads", "1",
-               "--state", str(state), "--stats", str(stats)] + [a for o in sets for a in ("--set", o)]
-        r = _run(cmd, ranks=None if ranks == 1 else ranks, timeout=300)
-        assert r.returncode == 0, r.stderr[-3000:]
-        return dict(np.load(state)), json.loads(stats.read_text())
+        return _driver(tmp_path, ranks, scene=collapse, steps=600, overrides=sets, timeout=300)
 
     s, s_stats = run(1)
     m, m_stats = run(2)
@@ -348,12 +344,7 @@ def test_mpi_3d_soil_equals_serial(tmp_path):
     sets = ["parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0"]
 
     def run(ranks):
-        state, stats = tmp_path / f"s{ranks}.npz", tmp_path / f"s{ranks}.json"
-        cmd = [sys.executable, "-m", "solver.parallel.driver", str(scene), "--steps", "300", "--threads", "1",
-               "--state", str(state), "--stats", str(stats)] + [a for o in sets for a in ("--set", o)]
-        r = _run(cmd, ranks=None if ranks == 1 else ranks, timeout=300)
-        assert r.returncode == 0, r.stderr[-3000:]
-        return dict(np.load(state)), json.loads(stats.read_text())
+        return _driver(tmp_path, ranks, scene=scene, steps=300, overrides=sets, timeout=300)
 
     s, s_stats = run(1)
     assert s["x"].shape[1] == 3 and np.abs(s["v"]).max() > 0.05       # 3D, and flowing

@@ -261,17 +261,20 @@ def _tensor_signs(sign, offset, lo, hi, no_slip_lo, no_slip_hi):
 
 
 @kernel
+def _static_increment(gravity, x, rho, i, j):
+    """rho_j g . (x_i - x_j): the static pressure difference from source j down to image i."""
+    gdx = 0.0
+    for a in range(x.shape[1]):
+        gdx += gravity[a] * (x[i, a] - x[j, a])
+    return rho[j] * gdx
+
+
+@kernel
 def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p):
     """p_image = p_source + rho_source g . (x_image - x_source): the mirror pressure plus the
     hydrostatic difference between the two points (numerics.image_pressure = "hydrostatic")."""
-    dim = x.shape[1]
     for k in range(src.shape[0]):
-        i = first + k
-        j = src[k]
-        dp = 0.0
-        for a in range(dim):
-            dp += gravity[a] * (x[i, a] - x[j, a])
-        p[i] += rho[j] * dp
+        p[first + k] += _static_increment(gravity, x, rho, first + k, src[k])
 
 
 @kernel  # images are a thin layer: a serial loop
@@ -295,11 +298,7 @@ def add_equilibrium_image_stress(first, src, x, rho, gravity, mean_stress, stres
         gn[a] = gravity[a] / np.sqrt(g2)
     for k in range(src.shape[0]):
         i = first + k
-        j = src[k]
-        gdx = 0.0
-        for a in range(dim):
-            gdx += gravity[a] * (x[i, a] - x[j, a])
-        q = rho[j] * gdx
+        q = _static_increment(gravity, x, rho, i, src[k])
         mean_stress[i] += q / 3.0
         stress[i, 0] -= q * (gn[0] * gn[0] - 1.0 / 3.0)
         stress[i, 1] -= q * (gn[1] * gn[1] - 1.0 / 3.0)
