@@ -52,3 +52,13 @@ def test_boundary_is_contiguous_from_the_left_wall():
     gamma[(X[:, 0] > 7 * DX)] = 0.0                          # ... undisturbed again to its right: not counted
     fx, fy = fl.strain_boundary(X, X, DX, gamma, 0.1)
     assert np.allclose(fx, 4 * DX) and len(fx) == 3         # particle i = 3 at 3.5 dx, + dx/2
+
+
+def test_displacement_line_has_one_point_per_lattice_row():
+    """Regression: rows at (i + 1/2) dx binned with np.round merged in pairs (round half to
+    even), so the failure line of the collapse used about half the rows."""
+    from verification.column_collapse import failure_line
+    X = lattice(20, 12)
+    fx, fy = failure_line(X, X, DX, threshold=0.005)
+    assert len(fx) == 12 and np.allclose(np.sort(fy), (np.arange(12) + 0.5) * DX)
+    assert np.allclose(fx, 20 * DX)                        # undisturbed: each row's last particle + dx/2

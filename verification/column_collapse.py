@@ -103,19 +103,21 @@ def deposit_front(x, dx):
     return float((xs[gaps[0]] if len(gaps) else xs[-1]) + 0.5 * dx)
 
 
-def failure_line(x0, x, dx, threshold):
+def failure_line(x0, x, dx, threshold, at_initial=False):
     """For each initial row, the largest final x of particles that moved less than `threshold`
-    (the undisturbed zone of Bui et al. 2008), + dx/2; returned sorted by height."""
+    (the undisturbed zone of Bui et al. 2008), + dx/2; returned sorted by height. `at_initial`:
+    the boundary particle at its initial position instead (column_collapse_failure_line)."""
     moved = np.linalg.norm(x - x0, axis=1)
     still = moved < threshold
+    pos = x0 if at_initial else x
     rows = np.floor(x0[:, 1] / dx).astype(int)            # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
     ys, xs = [], []
     for r in np.unique(rows):
         sel = still & (rows == r)
         if sel.any():
-            k = np.flatnonzero(sel)[np.argmax(x[sel, 0])]
-            xs.append(x[k, 0] + 0.5 * dx)
-            ys.append(x[k, 1])
+            k = np.flatnonzero(sel)[np.argmax(pos[sel, 0])]
+            xs.append(pos[k, 0] + 0.5 * dx)
+            ys.append(pos[k, 1])
     order = np.argsort(ys)
     return np.array(xs)[order], np.array(ys)[order]
 

@@ -38,20 +38,9 @@ H_OVER_DX = 1.3                                              # solver default (d
 
 
 def boundary(x0, x, dx, threshold, initial=False):
-    """Per initial row, the right-most particle that moved less than `threshold`, at its final
-    (or initial) position, + dx/2; sorted by height."""
-    moved = np.linalg.norm(x - x0, axis=1)
-    pos = x0 if initial else x
-    rows = np.floor(x0[:, 1] / dx).astype(int)            # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
-    xs, ys = [], []
-    for r in np.unique(rows):
-        sel = (moved < threshold) & (rows == r)
-        if sel.any():
-            k = np.flatnonzero(sel)[np.argmax(pos[sel, 0])]
-            xs.append(pos[k, 0] + 0.5 * dx)
-            ys.append(pos[k, 1])
-    o = np.argsort(ys)
-    return np.array(xs)[o], np.array(ys)[o]
+    """The displacement-threshold line of verification/column_collapse.py, with the boundary
+    particle at its final (or initial) position."""
+    return cc.failure_line(x0, x, dx, threshold, at_initial=initial)
 
 
 def table(x0, x, dx, thresholds=THRESHOLDS):
