@@ -314,6 +314,37 @@ def extrapolation_text(rows, experiment):
             + ".\n\n")
 
 
+def accuracy_cost_figure(rows, experiment_runout, path):
+    """What accuracy costs in time: |runout error| and failure-line RMS against wall time, one
+    point per spacing of the study, with the tolerance-free reference lines (digitisation,
+    Richardson limit)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    wall = np.array([float(r["wall_time_s"]) for r in rows])
+    dx = [float(r["spacing_mm"]) for r in rows]
+    runout = np.abs(np.array([float(r["runout_m"]) for r in rows]) - experiment_runout) * 1000
+    failure = np.array([float(r["failure_rms_mm"]) for r in rows])
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    ax.plot(wall, runout, "o-", label="|runout - experiment|")
+    ax.plot(wall, failure, "s-", label="failure-line RMS")
+    for w, d, a, b in zip(wall, dx, runout, failure):
+        ax.annotate(f"{d:g} mm", (w, max(a, b)), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    if rows[0].get("runout_extrapolated_m") not in (None, ""):
+        limit = abs(float(rows[0]["runout_extrapolated_m"]) - experiment_runout) * 1000
+        ax.axhline(limit, color="C0", ls=":", lw=1, label="runout error of the Richardson limit")
+    ax.axhline(1000 * DIGITISATION, color="k", ls="--", lw=0.8, label="digitisation (3 mm)")
+    ax.set(xscale="log", xlabel="wall time (s, one thread)", ylabel="error (mm)",
+           title="Column collapse: error against cost")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     """Resolution study: metrics, their differences to the finest run (the discretisation
     errors the checks read) and wall time side by side; writes CSV + Markdown."""
@@ -344,6 +375,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                      **{f"{m}_vs_finest": d[m] for m in METRICS}})
     add_runout_extrapolation(rows)
     out.mkdir(parents=True, exist_ok=True)
+    accuracy_cost_figure(rows, float(surf[-1, 0]), out / "accuracy_cost.png")
     with open(out / "resolution_study.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
