@@ -139,20 +139,22 @@ def _lists(x, h):
     return cl.neighbour_list(x, np.arange(len(x), dtype=np.int64), radius)
 
 
-@pytest.mark.parametrize("with_av,with_art", [(False, False), (True, False), (True, True)])
-def test_soil_rates_match_twin(rng, with_av, with_art):
-    dx, h, dim = 0.01, 0.013, 2
-    x = disordered_lattice(8, dim, dx, rng)
+@pytest.mark.parametrize("with_av,with_art,dim", [(False, False, 2), (True, False, 2), (True, True, 2), (True, True, 3)])
+def test_soil_rates_match_twin(rng, with_av, with_art, dim):
+    dx, h = 0.01, 0.013
+    x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
     n = len(x)
     v = rng.normal(0, 0.3, (n, dim))
     rho = 2000 * (1 + rng.uniform(-0.01, 0.01, n))
     p = rng.uniform(0, 3000, n)
     s = rng.normal(0, 500, (n, 6))
-    s[:, 4:] = 0.0                                      # plane strain: no out-of-plane shear
-    mass = rho * dx * dx
+    if dim == 2:
+        s[:, 4:] = 0.0                                  # plane strain: no out-of-plane shear
+    mass = rho * dx**dim
     art = rng.normal(0, 1e-4, (n, 6)) if with_art else None
     if with_art:
-        art[:, 4:] = 0.0
+        if dim == 2:
+            art[:, 4:] = 0.0
         art[rng.random(n) < 0.5] = 0.0                  # compressed particles (R = 0): the kernel skips pairs of two
     mat = np.zeros(n, dtype=np.int32)
     c = np.array([20.0])

@@ -6,6 +6,7 @@ the bottom row of the Bui et al. (2008) collapse slid on a "no-slip" floor at ~0
 """
 
 import numpy as np
+import pytest
 
 from solver.simulation import Simulation
 from verification.column_collapse import scene_at
@@ -168,6 +169,7 @@ def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floo
     rows = slice(n, n + len(src))
     sigma_before = ps["stress_dev"][rows, :3] - ps["mean_stress"][rows, None]
     shear_before = ps["stress_dev"][rows, 3].copy()
+    p_before, s_before = ps["mean_stress"][rows].copy(), ps["stress_dev"][rows].copy()
     add_equilibrium_image_stress(n, src, ps["x"], ps["rho"], sim.gravity, ps["mean_stress"], ps["stress_dev"])
     sigma_after = ps["stress_dev"][rows, :3] - ps["mean_stress"][rows, None]
     drop = ps["rho"][src] * 9.81 * (ps["x"][src, 1] - ps["x"][rows, 1])      # rho g (y_source - y_image)
@@ -175,11 +177,42 @@ def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floo
     np.testing.assert_allclose(sigma_after[:, [0, 2]], sigma_before[:, [0, 2]], rtol=1e-12, atol=1e-9)
     np.testing.assert_array_equal(ps["stress_dev"][rows, 3], shear_before)
     left = (sign[:, 0] < 0) & (sign[:, 1] > 0)
-    assert left.any() and np.all(drop[left] == 0.0)                         # side wall: unchanged
+    assert left.any()                                                       # side wall (same height): unchanged
+    np.testing.assert_array_equal(ps["mean_stress"][rows][left], p_before[left])
+    np.testing.assert_array_equal(ps["stress_dev"][rows][left], s_before[left])
+    np.testing.assert_allclose(ps["stress_dev"][rows, :3].sum(axis=1), 0.0, atol=1e-9)  # s stays deviatoric
     # the floor image's vertical stress continues the geostatic profile of its own column
     floor = (sign[:, 0] > 0) & (sign[:, 1] < 0)
     rho_g_top = ps["rho"][src[floor]] * 9.81 * (0.05 - ps["x"][n:][:len(src)][floor, 1])
     np.testing.assert_allclose(-sigma_after[floor, 1], rho_g_top, rtol=2e-3)   # rho varies by p/K ~ 1e-3 in depth
+
+
+def test_equilibrium_image_stress_matches_twin_in_3d_with_tilted_gravity(rng):
+    """The kernel against a NumPy twin, sigma' = sigma - rho_src g.(x_img - x_src) g^ g^ with
+    sigma = -p I + s, on random 3D states, positions and a gravity not along an axis."""
+    from solver.physics.boundary import add_equilibrium_image_stress
+    n_src, n_img = 40, 30
+    x = rng.uniform(-0.1, 0.1, (n_src + n_img, 3))
+    rho = rng.uniform(1800, 2700, n_src + n_img)
+    p = rng.uniform(0, 3000, n_src + n_img)
+    s6 = rng.normal(0, 500, (n_src + n_img, 6))
+    s6[:, :3] -= s6[:, :3].mean(axis=1, keepdims=True)
+    src = rng.integers(0, n_src, n_img)
+    gravity = np.array([1.5, -2.0, -9.5])
+    p1, s1 = p.copy(), s6.copy()
+    add_equilibrium_image_stress(n_src, src, x, rho, gravity, p1, s1)
+    ghat = gravity / np.linalg.norm(gravity)
+    idx = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]
+    for k in range(n_img):
+        i, j = n_src + k, src[k]
+        q = rho[j] * gravity @ (x[i] - x[j])
+        sig = -p[i] * np.eye(3) + np.array([[s6[i, 0], s6[i, 3], s6[i, 5]], [s6[i, 3], s6[i, 1], s6[i, 4]],
+                                            [s6[i, 5], s6[i, 4], s6[i, 2]]])
+        sig_new = sig - q * np.outer(ghat, ghat)
+        p_new = -np.trace(sig_new) / 3
+        assert p1[i] == pytest.approx(p_new, rel=1e-12, abs=1e-9)
+        np.testing.assert_allclose(s1[i], [(sig_new + p_new * np.eye(3))[a, b] for a, b in idx], rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(p1[:n_src], p[:n_src])                  # sources untouched
 
 
 def test_equilibrium_image_stress_holds_the_ci_size_collapse_deposit_at_rest():

@@ -72,24 +72,34 @@ def test_hydrostatic_image_pressure_keeps_fine_still_water_at_rest():
     assert not failed, "\n".join(failed)
 
 
-@pytest.mark.slow
-def test_column_collapse_matches_experiment_at_ci_resolution(tmp_path):
+@pytest.fixture(scope="module")
+def collapse_ci(tmp_path_factory):
     """dx = 5 mm, the coarsest spacing of the committed resolution study (its tolerances carry
     that spacing's discretisation error; column_collapse module docstring)."""
-    res = column_collapse.run(20, out_dir=tmp_path)
-    assert res.figure.is_file()
-    failed = [c.line() for c in res.checks if not c.passed]
+    return column_collapse.run(20, out_dir=tmp_path_factory.mktemp("collapse"))
+
+
+FAILURE_LINE = "failure-line RMS error in x (m)"
+
+
+@pytest.mark.slow
+def test_column_collapse_matches_experiment_at_ci_resolution(collapse_ci):
+    """Runout, height at the wall, free surface, rest and yield. The runout check is weak here:
+    it cannot fail while the experiment lies between this runout and the Richardson limit
+    (module docstring); the resolution study's R_0 (+3.5 %) is the discriminating figure."""
+    assert collapse_ci.figure.is_file()
+    failed = [c.line() for c in collapse_ci.checks if not c.passed and c.metric != FAILURE_LINE]
     assert not failed, "\n".join(failed)
 
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="known discrepancy: the SPH undisturbed-zone boundary lies ~1 cm from the "
-                   "experiment's failure line at 4 and 2.5 mm (RMS 10.6 / 11.7 mm against 7.0 mm); the SPH shear band "
-                   "is ~4 cm wide at every displacement or strain threshold and artificial viscosity does not change it "
+                   "experiment's failure line (RMS 8.4 / 10.6 / 11.7 mm at 5 / 4 / 2.5 mm against 3 mm: the error grows "
+                   "with refinement, so no discretisation allowance); the SPH shear band is 7-8 dx wide at every "
+                   "displacement or strain threshold and artificial viscosity does not change it "
                    "(verification/results/column_collapse/README.md); kept visible until the model resolves it")
-def test_column_collapse_failure_line_at_4mm():
-    res = column_collapse.run(25)
-    check = next(c for c in res.checks if c.metric.startswith("failure-line"))
+def test_column_collapse_failure_line(collapse_ci):
+    check = next(c for c in collapse_ci.checks if c.metric == FAILURE_LINE)
     assert check.passed, check.line()
 
 

@@ -11,16 +11,23 @@ failure line.
 
 Tolerances (`checks`): the data's digitisation uncertainty, +/- 3 mm (CSV header), plus this
 resolution's discretisation error from the committed resolution study
-(verification/results/column_collapse/resolution_study.csv). No other margin.
+(verification/results/column_collapse/resolution_study.csv). No other margin. A check is then
+a validation comparison in the sense of ASME V&V 20-2009: |SPH - experiment| within the
+numerical plus data uncertainty. Where the numerical uncertainty is large the comparison is
+weak, and the module says where:
   - runout: the study's three spacings converge monotonically, so the error at dx is estimated
     against the Richardson limit, GCI_SAFETY |R(dx) - R_0| with R(dx) = R_0 + C dx^p (observed
     order p; Roache 1998 three-grid GCI, Celik et al. 2008). The difference to the finest run,
-    used before, is a lower bound of that error for a monotone sequence, not an upper one.
+    used before, is a lower bound of that error for a monotone sequence, not an upper one (with
+    it the 5 and 4 mm runouts failed). Caveat: while the experiment lies between R(dx) and R_0,
+    as it does at all three spacings, this check cannot fail; the discriminating statement is
+    R_0 against the experiment (+16 mm, +3.5 %), reported as a note, since the uncertainty of
+    R_0 itself is not estimated (the refinement ratio 5 -> 4 mm, 1.25, is below the 1.3 Celik
+    et al. recommend).
   - the other metrics: |metric(dx) - metric(finest)|, and for the finest spacing its difference
-    to the next coarser one (height at the wall and profile change by less than the
-    digitisation between spacings; the failure line is not monotone, so no extrapolation).
-The extrapolated runout R_0 against the experiment is reported as a note: it is the model's
-error once the discretisation error is gone.
+    to the next coarser one; but no allowance at all for a metric whose error against the
+    experiment grows with refinement (the failure line: 8.4, 10.6, 11.7 mm): there the
+    allowance would reward the coarse spacings for an agreement refinement takes away.
 
 Observables:
   - runout: front of the contiguous deposit: particles beyond the first gap wider than 2 dx
@@ -44,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import GCI_SAFETY, RESULTS, CaseResult, Check, richardson, study_row, timed_samples
+from .common import GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, richardson, study_row, timed_samples
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
@@ -228,7 +235,22 @@ def discretization_error(resolution):
     err = {m: float(r[f"{m}_vs_finest"]) for m in METRICS}
     if r.get("runout_vs_extrapolated"):
         err["runout"] = GCI_SAFETY * float(r["runout_vs_extrapolated"])
+    for m in diverging_metrics():
+        err[m] = 0.0
     return err
+
+
+STUDY_ERRORS = {"profile": "profile_rms_mm", "failure": "failure_rms_mm"}   # RMS errors against the experiment
+
+
+def diverging_metrics():
+    """Metrics whose error against the experiment grows from the coarsest to the finest spacing
+    of the committed study (module docstring: they get no discretisation allowance)."""
+    if not STUDY_FILE.exists():
+        return []
+    with open(STUDY_FILE) as fh:
+        rows = sorted(csv.DictReader(fh), key=lambda r: -float(r["spacing_mm"]))
+    return [m for m, col in STUDY_ERRORS.items() if float(rows[-1][col]) > float(rows[0][col])]
 
 
 def extrapolated_runout():
@@ -255,8 +277,14 @@ def checks(res, ref=None):
     disc = discretization_error(res.resolution)
     d = disc or dict.fromkeys(METRICS, 0.0)
     how = {"runout": f"resolution study, Richardson limit x GCI safety {GCI_SAFETY}"}
-    note = (lambda m: f" + discretisation error {d[m] * 1000:.1f} mm ({how.get(m, 'resolution study')})") if disc else \
-        (lambda m: " (no resolution study on file for this resolution: digitisation only)")
+    diverging = diverging_metrics()
+
+    def note(m):
+        if not disc:
+            return " (no resolution study on file for this resolution: digitisation only)"
+        if m in diverging:
+            return " only: the error grows with refinement in the resolution study, so no discretisation allowance"
+        return f" + discretisation error {d[m] * 1000:.1f} mm ({how.get(m, 'resolution study')})"
     dig = "digitisation +/- 3 mm (CSV header)"
     return [
         Check("runout error (m)", s["runout_error"], DIGITISATION + d["runout"], dig + note("runout")),
@@ -394,7 +422,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     text = ("# Column collapse (Bui et al. 2008): resolution study\n\n"
             f"Experiment: runout {surf[-1, 0]:.3f} m, height at wall {surf[0, 1]:.3f} m. Source: {SOURCE}.\n"
             f"Wall time: stepping only (compile excluded), one process, NUMBA_NUM_THREADS="
-            f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, on a 2-core machine shared with other jobs.\n"
+            f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}.\n"
             "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse --study`\n\n"
             + "\n".join(lines) + "\n\n"
             + extrapolation_text(rows, float(surf[-1, 0])) +

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from . import column_collapse as cc
+from .common import machine_load
 
 CASES = ((25, 1.0, 1.0), (25, 0.5, 0.5), (25, 0.3, 0.3), (25, 0.1, 0.0), (20, 1.0, 1.0), (20, 0.5, 0.5))
 FIELDS = ("resolution", "spacing_mm", "alpha", "beta", "runout_m", "runout_error_m", "wall_height_error_m",
@@ -107,7 +108,7 @@ def write(rows, out):
             "Scene verification/column_collapse.py (Bui et al. 2008 bars), numerics.artificial_viscosity.bars = "
             "(alpha, beta) varied; default alpha = beta = 1 (seed sec. 2.4). Errors are SPH - experiment. Wall time: "
             "stepping only (for a blow-up: until the failure, set-up included), one process, NUMBA_NUM_THREADS="
-            f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, 2-core machine shared with other jobs.\n"
+            f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}.\n"
             "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse_viscosity`\n\n"
             + "\n".join(lines) + "\n" + scales)
     (out / "artificial_viscosity.md").write_text(text)

@@ -4,6 +4,7 @@ reference data, and the resolution-study table (error and wall time side by side
 from __future__ import annotations
 
 import csv
+import os
 import time
 import tomllib
 from dataclasses import dataclass, field
@@ -154,6 +155,13 @@ def richardson(spacings, values, orders=(0.5, 4.0)):
     p = 0.5 * (lo + hi)
     f0 = f3 - d23 * h3 ** p / (h2 ** p - h3 ** p)
     return p, f0
+
+
+def machine_load():
+    """How busy the machine was when a study was timed: its wall times are comparable only at
+    similar load (1-minute load average over the cores)."""
+    load = os.getloadavg()[0]
+    return f"{os.cpu_count()}-core machine, 1-min load average {load:.2f} when the table was written"
 
 
 def save_figure(fig, path, dpi=120):

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from .column_collapse import scene_at
-from .common import RESULTS, CaseResult, Check, rms, study_row
+from .common import RESULTS, CaseResult, Check, machine_load, rms, study_row
 
 H = 0.2                     # column height (m)
 WIDTH = 0.12                # column width between the free-slip walls (m)
@@ -312,7 +312,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                      + ("pass" if res.passed else "FAIL: " + "; ".join(c.metric for c in res.checks if not c.passed)) + " |")
     text = ("# Soil self-weight: confined column (1D analytic) and a 15 deg heap: resolution study\n\n"
             f"Wall time: stepping, one process, NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
-            "2-core machine shared with other jobs.\nReproduce: `NUMBA_NUM_THREADS=1 python -m verification.soil_self_weight --study`\n\n"
+            f"{machine_load()}.\nReproduce: `NUMBA_NUM_THREADS=1 python -m verification.soil_self_weight --study`\n\n"
             + "\n".join(lines) + "\n")
     (out / "resolution_study.md").write_text(text)
     print(text)
