@@ -63,7 +63,7 @@ def main(argv=None):
     comm.barrier()
     wall = time.perf_counter() - t0
     names = [n for n in ("x", "v", "rho", "mass", "material", "id", "v_half", "rho_half", "mean_stress", "stress_dev",
-                         "stress_dev_half", "eps_vp") if n in sim.particles]
+                         "stress_dev_half", "eps_vp", "art_stress") if n in sim.particles]
     state = comm.gather_owned(sim.particles, names)
     report = comm.report()
     cpus = [cpu] if not report else [None] * len(report)
