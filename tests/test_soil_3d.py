@@ -8,6 +8,7 @@ import tomllib
 
 import numpy as np
 
+from roundoff import roundoff_tolerances
 from solver.initial_state import create_particles
 from solver.plan import build_plan
 from solver.scene import parse_scene
@@ -34,10 +35,14 @@ def test_3d_slab_between_free_slip_walls_collapses_as_plane_strain():
     assert np.isfinite(x).all()
     assert x[:, 0].max() > 0.15                           # it collapsed (measured: front 0.168 m)
     assert np.abs(ps.owned("art_stress")).max() > 0.0     # the artificial stress acted
+    # Each y-layer sums the same pair terms as the first, in a mirrored order: the summation-order
+    # bound of tests/roundoff.py (written for MPI vs serial) applies. Measured: 3e-14 m.
+    mat = scene.materials["bars"]
+    sigma = np.abs(ps.owned("stress_dev")).max() + np.abs(ps.owned("mean_stress")).max()
+    tol_x, tol_v, _ = roundoff_tolerances({"x": x, "v": ps.owned("v")}, {"t": sim.t}, 0.01, mat.density,
+                                          mat.sound_speed, sigma, 1.0)
     layers = np.unique(np.round(x0[:, 1], 9))
     first = x[np.isclose(x0[:, 1], layers[0])]
     for y in layers[1:]:
-        # Measured: 3e-14 m. Bound 1e-9 m: summation-order round-off (1e-16 relative) grown by the
-        # ~2000 steps of a flow that amplifies perturbations, far below any physical asymmetry (dx = 1e-2 m).
-        assert np.abs(x[np.isclose(x0[:, 1], y)][:, [0, 2]] - first[:, [0, 2]]).max() < 1e-9
-    assert np.abs(x[:, 1] - x0[:, 1]).max() < 1e-9 and np.abs(ps.owned("v_half")[:, 1]).max() < 1e-9
+        assert np.abs(x[np.isclose(x0[:, 1], y)][:, [0, 2]] - first[:, [0, 2]]).max() <= tol_x
+    assert np.abs(x[:, 1] - x0[:, 1]).max() <= tol_x and np.abs(ps.owned("v_half")[:, 1]).max() <= tol_v
