@@ -286,7 +286,9 @@ def add_equilibrium_image_stress(first, src, x, rho, gravity, mean_stress, stres
     image below its source is then more compressed than it, as the soil below a floor would
     be, so a particle pressed into the image layer is pushed back, where the mirror image
     alone (seed eq. 23) leaves it in neutral equilibrium at the wall. As p and s:
-    dp = q / 3, ds = -q (g^ g^ - I / 3). Side walls: g . dx = 0, no change."""
+    dp = q / 3, ds = -q (g^ g^ - I / 3). Side walls: g . dx = 0, no change. On a frictional
+    wall that slips, frictional_images then sets the image shear itself, replacing the shear
+    part of this increment, which is non-zero only when gravity is not normal to the wall."""
     dim = x.shape[1]
     g2 = 0.0
     for a in range(dim):
