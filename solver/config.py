@@ -22,10 +22,13 @@ PARALLEL = os.environ.get("SCOURSPH_NO_PARALLEL", "0") != "1"
 FAST = dict(cache=True, fastmath=True, error_model="numpy")
 
 
-def kernel(fn=None, *, parallel=False):
-    """Decorate a per-particle or per-pair kernel with the project's Numba flags."""
+def kernel(fn=None, *, parallel=False, exact=False):
+    """Decorate a per-particle or per-pair kernel with the project's Numba flags.
+    exact=True compiles without fastmath, for kernels that must see NaN and inf: fastmath
+    lets LLVM assume there are none and fold np.isfinite to True."""
 
     def wrap(f):
-        return njit(parallel=parallel and PARALLEL, **FAST)(f)
+        flags = dict(FAST, fastmath=False) if exact else FAST
+        return njit(parallel=parallel and PARALLEL, **flags)(f)
 
     return wrap(fn) if fn is not None else wrap

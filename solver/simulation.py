@@ -12,7 +12,7 @@ import numpy as np
 
 from .errors import BlowUpError
 from .initial_state import create_particles
-from .integrate import (STATE_NOT_FINITE, STATE_OK, as_rows, lf_drift, lf_kick, lf_predict, max_norm2,
+from .integrate import (STATE_OK, as_rows, lf_drift, lf_kick, lf_predict, max_norm2,
                         state_status)
 from .kernels import SUPPORT_RADIUS, cubic_spline_normalisation, cubic_spline_w
 from .materials import PHASE_SOIL, PHASE_WATER
@@ -319,7 +319,7 @@ class Simulation:
         n = ps.n_owned
         x, v, rho = ps["x"][:n], ps["v_half"][:n], ps[self._rho_state][:n]
         bad_finite = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1) & np.isfinite(rho))
-        if status == STATE_NOT_FINITE and bad_finite.any():
+        if bad_finite.any():               # whatever the status code: NaN positions also compare as outside
             i = int(np.flatnonzero(bad_finite)[0])
             self._blow_up(f"non-finite state (NaN/inf) in {int(bad_finite.sum())} particle(s)",
                           f"first: particle id {ps['id'][i]} of material {self.plan.materials.names[ps['material'][i]]}")

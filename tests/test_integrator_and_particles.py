@@ -83,3 +83,39 @@ def test_no_recompilation_inside_the_time_loop():
     sim.advance_to(0.05)
     assert sim.rebuilds > rebuilds
     assert compiled() == before
+
+
+def test_state_status_sees_nan_and_inf_in_every_field():
+    """The blow-up check against its NumPy twin. A regression guard: compiled with the project's
+    fastmath flags, np.isfinite folded to True, so a NaN velocity or density went unseen and a
+    NaN position was reported as "outside the domain"."""
+    from solver.integrate import STATE_NOT_FINITE, STATE_OK, STATE_OUTSIDE, state_status
+
+    def twin(x, v, rho, lo, hi):
+        if not (np.isfinite(x).all() and np.isfinite(v).all() and np.isfinite(rho).all()):
+            return STATE_NOT_FINITE if not ((x < lo) | (x > hi)).any() else max(STATE_NOT_FINITE, STATE_OUTSIDE)
+        return STATE_OUTSIDE if ((x < lo) | (x > hi)).any() else STATE_OK
+
+    lo, hi = np.zeros(2), np.ones(2)
+    base = (np.full((4, 2), 0.5), np.zeros((4, 2)), np.ones(4))
+    cases = {"ok": (), "nan v": (("v", (2, 0), np.nan),), "inf v": (("v", (1, 1), np.inf),),
+             "nan x": (("x", (3, 1), np.nan),), "nan rho": (("rho", (0,), np.nan),),
+             "outside": (("x", (0, 0), 1.5),)}
+    for name, edits in cases.items():
+        x, v, rho = (a.copy() for a in base)
+        arrays = {"x": x, "v": v, "rho": rho}
+        for field, index, value in edits:
+            arrays[field][index] = value
+        assert state_status(4, x, v, rho, lo, hi) == twin(x, v, rho, lo, hi), name
+    assert state_status(4, *[a.copy() for a in base[:2]], np.array([np.nan, 1, 1, 1]), lo, hi) == STATE_NOT_FINITE
+
+
+def test_nan_velocity_stops_a_serial_run_with_what_where_when():
+    from solver.errors import BlowUpError
+    sim = Simulation(scene_from_file("dam_break_2d.toml", **{"scene.spacing": 0.05715 / 10}))
+    sim.step()
+    sim.particles["v_half"][3, 0] = np.nan
+    with pytest.raises(BlowUpError) as info:
+        sim.step()
+    text = str(info.value)
+    assert "non-finite state" in text and "particle id" in text and "step 2" in text

@@ -163,6 +163,40 @@ def test_blow_up_on_one_rank_ends_job_with_its_message(tmp_path):
     assert "on rank 1 of 2" in r.stderr
 
 
+def test_nan_on_one_rank_ends_job_with_its_message_and_keeps_outputs(tmp_path):
+    """A NaN born on rank 1 only (injected at step 50 of the real `scoursph run` into the
+    velocity of its particle farthest from the rank cut, so it is still confined to rank 1 when
+    the check runs): every rank stops, exit 1, the root prints rank 1's non-finite-state
+    message once, and the snapshots written before it stay readable."""
+    import h5py
+    script = tmp_path / "nan_on_rank1.py"
+    script.write_text(
+        "import sys\n"
+        "import numpy as np\n"
+        "from solver.simulation import Simulation\n"
+        "original = Simulation.step\n"
+        "def step(self, *args, **kwargs):\n"
+        "    ps = self.particles\n"
+        "    if getattr(self.comm, 'rank', 0) == 1 and self.step_count == 50 and ps.n_owned:\n"
+        "        # the owned particle farthest from rank 0's ghosts: the NaN cannot reach rank 0 in one step\n"
+        "        x, n = ps['x'], ps.n_owned\n"
+        "        d = np.linalg.norm(x[:n, None] - x[None, n:ps.n_local], axis=2).min(axis=1)\n"
+        "        ps['v_half'][int(np.argmax(d)), 0] = np.nan\n"
+        "    return original(self, *args, **kwargs)\n"
+        "Simulation.step = step\n"
+        "from solver.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n")
+    out = tmp_path / "o"
+    r = _run([sys.executable, str(script), "run", str(SCENE), "--out", str(out), "--quiet", "--threads", "1",
+              "--set", f"scene.spacing={SPACING!r}", "--set", "output.interval=0.001"], ranks=2, timeout=120)
+    assert r.returncode == 1, r.stderr[-3000:]
+    assert r.stderr.count("scoursph: error:") == 1, r.stderr[-3000:]
+    assert "non-finite state" in r.stderr and "on rank 1 of 2" in r.stderr, r.stderr[-3000:]
+    with h5py.File(out / "particles.h5") as f:           # the series written before the blow-up
+        snaps = list(f.keys()) if "snapshots" not in f else list(f["snapshots"].keys())
+        assert len(snaps) >= 1
+
+
 @pytest.mark.parametrize("how", ["uncaught", "fail"])
 def test_exception_on_one_rank_aborts_all(tmp_path, how):
     """An unexpected exception on rank 1 while rank 0 waits in a collective: the job ends at
