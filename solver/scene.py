@@ -50,7 +50,10 @@ class Walls(Strict):
     y_max: WallKind | None = None
     z_min: WallKind | None = None
     z_max: WallKind | None = None
-    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0   # degrees, Coulomb friction of "frictional" walls
+    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)] | None = None   # degrees, Coulomb friction of "frictional" walls (required for them)
+
+    def kinds(self):
+        return [k for k in (self.x_min, self.x_max, self.y_min, self.y_max, self.z_min, self.z_max) if k is not None]
 
 
 class Water(Strict):
@@ -232,6 +235,8 @@ def _check_consistency(s: Scene):
         for side in ("min", "max"):
             if getattr(s.walls, f"{axis}_{side}") is not None:
                 raise _Inconsistent(f"walls.{axis}_{side}", f"no {axis} axis in a {dim}D scene")
+    if "frictional" in s.walls.kinds() and s.walls.friction_angle is None:
+        raise _Inconsistent("walls.friction_angle", "required for a 'frictional' wall (the literature gives no default)")
     if not s.materials:
         raise _Inconsistent("materials", "at least one material is needed")
     if not s.blocks:

@@ -28,6 +28,8 @@ BAD = {
     "bad wall kind": (lambda t: edit(t, 'x_min = "free_slip"', 'x_min = "sticky"'), "walls.x_min", "Input should be"),
     "gravity size": (lambda t: edit(t, "gravity = [0.0, -9.81]", "gravity = [0.0, 0.0, -9.81]"), "scene.gravity", "needs 2"),
     "toml syntax": (lambda t: t + "\n[[oops\n", "(syntax)", ""),
+    "frictional wall without an angle": (lambda t: edit(t, 'x_min = "free_slip"', 'x_min = "frictional"'),
+                                         "walls.friction_angle", "required for a 'frictional' wall"),
 }
 
 

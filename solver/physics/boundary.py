@@ -191,7 +191,7 @@ class ImageWalls:
         self.frictional_lo = np.array([k[0] == "frictional" for k in kinds])
         self.frictional_hi = np.array([k[1] == "frictional" for k in kinds])
         self.frictional = bool(self.frictional_lo.any() or self.frictional_hi.any())
-        self.mu = float(np.tan(np.radians(scene.walls.friction_angle)))
+        self.mu = float(np.tan(np.radians(scene.walls.friction_angle or 0.0)))   # set whenever a wall is frictional
         self.fric_axis = np.zeros(0, dtype=np.int64)
         self.fric_side = np.zeros(0)
         self.vsign = None
