@@ -51,7 +51,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, richardson, study_row, timed_samples
+from .common import (GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, richardson, save_figure, study_row,
+                     timed_samples, write_csv)
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
@@ -367,10 +368,7 @@ def accuracy_cost_figure(rows, experiment_runout, path):
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=130)
 
 
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
@@ -402,12 +400,8 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                      "profile_rms_mm": 1000 * s["profile_rms"], "failure_rms_mm": 1000 * s["failure_rms"],
                      **{f"{m}_vs_finest": d[m] for m in METRICS}})
     add_runout_extrapolation(rows)
-    out.mkdir(parents=True, exist_ok=True)
     accuracy_cost_figure(rows, float(surf[-1, 0]), out / "accuracy_cost.png")
-    with open(out / "resolution_study.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(out / "resolution_study.csv", rows)
     lines = ["| dx (mm) | particles | steps | runout (m) | runout error | height at wall (m) | profile RMS (mm) | "
              "failure-line RMS (mm) | runout vs finest (mm) | wall time (s) |", "|" + "---|" * 10]
     for r in rows:

@@ -16,7 +16,7 @@ import csv
 import os
 
 from . import column_collapse as cc
-from .common import machine_load
+from .common import machine_load, write_csv
 
 OPTION = {"numerics": {"image_pressure": "hydrostatic"}}
 FIELDS = ("resolution", "spacing_mm", "runout_mirror_m", "runout_equilibrium_m", "failure_rms_mirror_mm",
@@ -41,11 +41,7 @@ def rows(resolutions=cc.STUDY_RESOLUTIONS):
 
 
 def write(table, out=cc.OUT):
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "equilibrium_images.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(FIELDS))
-        w.writeheader()
-        w.writerows(table)
+    write_csv(out / "equilibrium_images.csv", table, FIELDS)
     lines = ["| dx (mm) | runout, mirror (m) | runout, equilibrium (m) | failure-line RMS, mirror (mm) | "
              "failure-line RMS, equilibrium (mm) | profile RMS, equilibrium (mm) | KE final/peak, equilibrium | "
              "wall time, mirror / equilibrium (s) |", "|" + "---|" * 8]

@@ -20,7 +20,6 @@ Writes verification/results/column_collapse/artificial_viscosity.md and .csv.
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import re
 import time
@@ -29,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from . import column_collapse as cc
-from .common import machine_load
+from .common import machine_load, write_csv
 
 CASES = ((25, 1.0, 1.0), (25, 0.5, 0.5), (25, 0.3, 0.3), (25, 0.1, 0.0), (20, 1.0, 1.0), (20, 0.5, 0.5))
 FIELDS = ("resolution", "spacing_mm", "alpha", "beta", "runout_m", "runout_error_m", "wall_height_error_m",
@@ -82,11 +81,7 @@ def fmt(v, spec):
 
 
 def write(rows, out):
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "artificial_viscosity.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(FIELDS))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(out / "artificial_viscosity.csv", rows, FIELDS)
     lines = ["| dx (mm) | alpha | beta | runout (m) | runout error (m) | height at wall error (m) | profile RMS (mm) | "
              "failure-line RMS (mm) | KE final/peak | farthest particle (m) | outcome | wall time (s) |", "|" + "---|" * 12]
     for r in rows:

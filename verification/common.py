@@ -105,14 +105,21 @@ def write_study_table(path, header, rows):
     return path
 
 
+def write_csv(path, rows, fields=None):
+    """Rows (dicts) as a CSV file with a header (fields: the column order; default the first row's keys)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(fields or rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
 def save_study(rows, out_dir, stem):
     """A resolution study's rows (dicts) as OUT/stem.csv (read back by the checks) and stem.md."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / f"{stem}.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(out / f"{stem}.csv", rows)
     write_study_table(out / f"{stem}.md", list(rows[0]), [list(r.values()) for r in rows])
     return rows
 
