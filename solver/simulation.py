@@ -37,6 +37,7 @@ class Simulation:
         self.h = scene.h
         self.is3d = True if dim == 3 else None   # compile-time dimension switch for the kernels
         self.norm = cubic_spline_normalisation(dim, self.h)
+        self.inv_w_dx = 1.0 / float(cubic_spline_w(scene.scene.spacing, self.h, self.norm))   # artificial stress f_ij = W_ij / W(dx)
         self.skin = scene.numerics.neighbour_skin * self.h
         self.radius = SUPPORT_RADIUS * self.h + self.skin      # Verlet list radius
         self.lo = np.asarray(scene.domain.min, float)
@@ -191,14 +192,13 @@ class Simulation:
     def _pass_soil_rates(self, nl):
         ps, mats, opt = self.particles, self.plan.materials, self.plan.options
         art = opt.get("artificial_stress")
-        w_dx = float(cubic_spline_w(self.scene.scene.spacing, self.h, self.norm))
         soil.soil_rates(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mean_stress"], ps["stress_dev"],
             ps["mass"], ps["material"], mats.sound_speed, mats.soil.shear, self.h, self.norm,
             ps["drho"], ps["acc"], ps["dstress"],
             mats.av_alpha if opt["soil_artificial_viscosity"] else None,
             mats.av_beta if opt["soil_artificial_viscosity"] else None,
-            ps["art_stress"] if art else None, self.scene.numerics.artificial_stress_exponent, 1.0 / w_dx,
+            ps["art_stress"] if art else None, self.scene.numerics.artificial_stress_exponent, self.inv_w_dx,
         )
 
     def _pass_viscous_stress(self, nl):

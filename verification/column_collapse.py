@@ -51,8 +51,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, richardson, save_figure, study_row,
-                     timed_samples, write_csv)
+from .common import (GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, report, richardson, save_figure,
+                     study_row, timed_samples, write_csv)
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
@@ -437,13 +437,7 @@ def main(argv=None):
     if args.study:
         study(out_dir=args.out)
         return 0
-    res = run(args.resolution, out_dir=args.out)
-    print(f"{res.particles} particles, {res.steps} steps, {res.wall_time:.1f} s")
-    for c in res.checks:
-        print(c.line())
-    for line in res.notes:
-        print("  note:", line)
-    return 0 if res.passed else 1
+    return report(run(args.resolution, out_dir=args.out))
 
 
 if __name__ == "__main__":

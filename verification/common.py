@@ -190,7 +190,11 @@ def case_main(module, argv=None):
         for row in module.study():
             print(row)
         return 0
-    res = module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification")
+    return report(module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification"))
+
+
+def report(res):
+    """Print a case's size, checks and notes; exit status 0 only if every check passed."""
     print(f"{res.particles} particles, {res.steps} steps, {res.wall_time:.1f} s")
     for check in res.checks:
         print(check.line())

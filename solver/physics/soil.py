@@ -34,6 +34,12 @@ def sqrt_j2(s0, s1, s2, s3, s4, s5):
 
 
 @kernel
+def _scaled(r, s0, s1, s2, s3, s4, s5):
+    """Radial scale-back of the deviatoric stress by r (seed eq. 16; Bui et al. 2008)."""
+    return r * s0, r * s1, r * s2, r * s3, r * s4, r * s5
+
+
+@kernel
 def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi):
     """Admissible (p, s) from a trial state; returns (p, s0..s5, plastic volumetric strain increment).
 
@@ -57,13 +63,7 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
         sf = max(cohesion + p * tan_phi, 0.0)
         j = sqrt_j2(s0, s1, s2, s3, s4, s5)
         if j > sf:
-            r = sf / j
-            s0 *= r
-            s1 *= r
-            s2 *= r
-            s3 *= r
-            s4 *= r
-            s5 *= r
+            s0, s1, s2, s3, s4, s5 = _scaled(sf / j, s0, s1, s2, s3, s4, s5)
     elif model == YIELD_DRUCKER_PRAGER:
         p_apex = -k_c / (3.0 * alpha_phi) if alpha_phi > 0.0 else -1e300
         if p < p_apex:
@@ -77,13 +77,7 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
                 dl = f / (shear + 9.0 * bulk * alpha_phi * alpha_psi)
                 p += 3.0 * bulk * alpha_psi * dl
                 dvol = 3.0 * alpha_psi * dl
-                r = max(j - shear * dl, 0.0) / j
-                s0 *= r
-                s1 *= r
-                s2 *= r
-                s3 *= r
-                s4 *= r
-                s5 *= r
+                s0, s1, s2, s3, s4, s5 = _scaled(max(j - shear * dl, 0.0) / j, s0, s1, s2, s3, s4, s5)
     return p, s0, s1, s2, s3, s4, s5, dvol
 
 
