@@ -37,7 +37,9 @@ class Simulation:
         self.h = scene.h
         self.is3d = True if dim == 3 else None   # compile-time dimension switch for the kernels
         self.norm = cubic_spline_normalisation(dim, self.h)
-        self.inv_w_dx = 1.0 / float(cubic_spline_w(scene.scene.spacing, self.h, self.norm))   # artificial stress f_ij = W_ij / W(dx)
+        # artificial stress f_ij = W_ij / W(dx); evaluated only when the plan has the term (nothing compiled otherwise)
+        self.inv_w_dx = (1.0 / float(cubic_spline_w(scene.scene.spacing, self.h, self.norm))
+                         if self.plan.options.get("artificial_stress") else 0.0)
         self.skin = scene.numerics.neighbour_skin * self.h
         self.radius = SUPPORT_RADIUS * self.h + self.skin      # Verlet list radius
         self.lo = np.asarray(scene.domain.min, float)
