@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 SCENE  ?= scenes/dam_break_2d.toml
 OUT    ?= runs/dam_break_2d
 
-.PHONY: run test bench verify references clean
+.PHONY: run test lint format bench verify references clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,9 +18,20 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/scoursph run $(SCENE) --out $(OUT)
 
-## make test: set up .venv and run the test suite
+## make test: set up .venv, check the style (ruff, fast), run the test suite
 test: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 	$(BIN)/python -m pytest -q
+
+## make lint: the style checks alone; make format rewrites the files to the style
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+format: $(STAMP)
+	$(BIN)/ruff check --fix .
+	$(BIN)/ruff format .
 
 ## make bench: performance benchmarks (pytest-benchmark), results in .benchmarks/
 bench: $(STAMP)

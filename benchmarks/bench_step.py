@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numba
 import pytest
-
 from dam_break_setup import dam_break
 from hand_fused import hand_fused_2d
 
@@ -30,10 +29,13 @@ def test_full_step(benchmark, n_particles, threads):
     n = sim.particles.n_owned
     rounds = 40 if n_particles < 50_000 else 12
     benchmark.pedantic(sim.step, rounds=rounds, iterations=1, warmup_rounds=2)
-    benchmark.extra_info.update(particles=n, threads=numba.get_num_threads(),
-                                particle_steps_per_s=n / benchmark.stats.stats.median,
-                                particle_steps_per_s_incl_rebuilds=n / benchmark.stats.stats.mean,
-                                rebuild_fraction=sim.rebuilds / max(sim.step_count, 1))
+    benchmark.extra_info.update(
+        particles=n,
+        threads=numba.get_num_threads(),
+        particle_steps_per_s=n / benchmark.stats.stats.median,
+        particle_steps_per_s_incl_rebuilds=n / benchmark.stats.stats.mean,
+        rebuild_fraction=sim.rebuilds / max(sim.step_count, 1),
+    )
 
 
 @pytest.mark.parametrize("variant", ["composed", "hand_fused"])
@@ -45,13 +47,37 @@ def test_composed_vs_hand_fused(benchmark, variant):
     ps, m = sim.particles, sim.plan.materials
     nl = sim.lists[("water", "water")]
     from solver.physics import fluid
+
     args = (nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"])
     if variant == "composed":
-        call = lambda: fluid.fluid_rates(*args, ps["material"], m.sound_speed, sim.h, sim.norm, ps["drho"], ps["acc"],
-                                         ps["tau"], m.av_alpha, m.av_beta, ps["xsph"], 0.001)
+        call = lambda: fluid.fluid_rates(
+            *args,
+            ps["material"],
+            m.sound_speed,
+            sim.h,
+            sim.norm,
+            ps["drho"],
+            ps["acc"],
+            ps["tau"],
+            m.av_alpha,
+            m.av_beta,
+            ps["xsph"],
+            0.001,
+        )
     else:
-        call = lambda: hand_fused_2d(*args, ps["tau"], m.sound_speed[0], m.av_alpha[0], m.av_beta[0], 0.001, sim.h, sim.norm,
-                                     ps["drho"], ps["acc"], ps["xsph"])
+        call = lambda: hand_fused_2d(
+            *args,
+            ps["tau"],
+            m.sound_speed[0],
+            m.av_alpha[0],
+            m.av_beta[0],
+            0.001,
+            sim.h,
+            sim.norm,
+            ps["drho"],
+            ps["acc"],
+            ps["xsph"],
+        )
     benchmark.pedantic(call, rounds=60, iterations=1, warmup_rounds=3)
     benchmark.extra_info.update(pairs_per_s=nl.pairs() / benchmark.stats.stats.median)
 
@@ -75,8 +101,13 @@ print(t1 - t0, resident() - before, sim.particles.n_owned)
 
 def _fresh_process(n, cache_dir):
     env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "NUMBA_NUM_THREADS": "1"}
-    out = subprocess.run([sys.executable, "-c", COLD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"), n=n)],
-                         capture_output=True, text=True, env=env, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", COLD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"), n=n)],
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
+    )
     seconds, rss, particles = out.stdout.split()
     return float(seconds), int(rss), int(particles)
 
@@ -90,5 +121,9 @@ def test_cold_compile_and_memory(benchmark):
         warm, _, _ = _fresh_process(2_000, cache)
         _, rss_small, n_small = _fresh_process(25_000, cache)
         _, rss_big, n_big = _fresh_process(100_000, cache)
-    benchmark.extra_info.update(cold_start_s=cold, warm_start_s=warm, compile_s=cold - warm,
-                                bytes_per_particle=(rss_big - rss_small) / (n_big - n_small))
+    benchmark.extra_info.update(
+        cold_start_s=cold,
+        warm_start_s=warm,
+        compile_s=cold - warm,
+        bytes_per_particle=(rss_big - rss_small) / (n_big - n_small),
+    )

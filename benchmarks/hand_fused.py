@@ -8,7 +8,9 @@ from solver.config import kernel
 
 
 @kernel(parallel=True)
-def hand_fused_2d(targets, start, index, x, v, rho, p, mass, tau, c, alpha, beta, eps, h, norm, drho, acc, xsph):
+def hand_fused_2d(
+    targets, start, index, x, v, rho, p, mass, tau, c, alpha, beta, eps, h, norm, drho, acc, xsph
+):
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]

@@ -1,7 +1,7 @@
 """Markdown table of a pytest-benchmark JSON (for the README):
 
-    .venv/bin/python -m pytest benchmarks/bench_step.py --benchmark-only -o addopts="" --benchmark-json=bench.json
-    .venv/bin/python benchmarks/report.py bench.json
+.venv/bin/python -m pytest benchmarks/bench_step.py --benchmark-only -o addopts="" --benchmark-json=bench.json
+.venv/bin/python benchmarks/report.py bench.json
 """
 
 import json
@@ -14,7 +14,9 @@ def main(path):
     print("| benchmark | median | figures |")
     print("|---|---|---|")
     for b in data["benchmarks"]:
-        info = ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in b["extra_info"].items())
+        info = ", ".join(
+            f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in b["extra_info"].items()
+        )
         print(f"| {b['name']} | {b['stats']['median'] * 1e3:.2f} ms | {info} |")
 
 

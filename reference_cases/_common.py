@@ -3,6 +3,7 @@ timing and logs, provenance (manifest.json), host facts.
 
 Nothing here knows about OpenFOAM or LIGGGHTS in particular.
 """
+
 from __future__ import annotations
 
 import datetime as _dt
@@ -30,8 +31,7 @@ def require(*programs: str) -> None:
     missing = [p for p in programs if shutil.which(p) is None]
     if missing:
         raise ToolMissing(
-            "not on PATH: " + ", ".join(missing)
-            + " (install with: bash reference_cases/install_tools.sh)"
+            "not on PATH: " + ", ".join(missing) + " (install with: bash reference_cases/install_tools.sh)"
         )
 
 
@@ -43,8 +43,7 @@ def mpirun_prefix(ranks: int) -> list[str]:
     return cmd
 
 
-def run(cmd: list[str], cwd: Path, log: Path, env: dict | None = None,
-        record: list | None = None) -> float:
+def run(cmd: list[str], cwd: Path, log: Path, env: dict | None = None, record: list | None = None) -> float:
     """Run `cmd` in `cwd`, stdout+stderr to `log`; return wall seconds.
 
     The command line (relative to the case directory) and its wall time are
@@ -58,12 +57,17 @@ def run(cmd: list[str], cwd: Path, log: Path, env: dict | None = None,
         proc = subprocess.run(cmd, cwd=cwd, stdout=fh, stderr=subprocess.STDOUT, env=full_env)
     wall = time.perf_counter() - t0
     if record is not None:
-        record.append({"command": shlex.join(cmd), "cwd": str(_rel(cwd)),
-                       "log": str(_rel(log)), "wall_s": round(wall, 2)})
+        record.append(
+            {
+                "command": shlex.join(cmd),
+                "cwd": str(_rel(cwd)),
+                "log": str(_rel(log)),
+                "wall_s": round(wall, 2),
+            }
+        )
     if proc.returncode != 0:
         tail = log.read_text(errors="replace")[-3000:]
-        raise ToolFailed(f"{shlex.join(cmd)} failed (rc={proc.returncode}) in {cwd}; "
-                         f"log {log}:\n{tail}")
+        raise ToolFailed(f"{shlex.join(cmd)} failed (rc={proc.returncode}) in {cwd}; log {log}:\n{tail}")
     return wall
 
 
@@ -97,8 +101,9 @@ def _os_release() -> str:
 
 def debian_package_version(pkg: str) -> str | None:
     try:
-        out = subprocess.run(["dpkg-query", "-W", "-f=${Version}", pkg],
-                             capture_output=True, text=True, check=False)
+        out = subprocess.run(
+            ["dpkg-query", "-W", "-f=${Version}", pkg], capture_output=True, text=True, check=False
+        )
         return out.stdout.strip() or None
     except FileNotFoundError:
         return None
@@ -133,6 +138,7 @@ def fill_template(text: str, values: dict) -> str:
         text = text.replace(f"@{k}@", str(v))
     if "@" in text:
         import re
+
         left = re.findall(r"@[A-Z0-9_]+@", text)
         if left:
             raise ValueError(f"unreplaced placeholders: {sorted(set(left))}")

@@ -8,6 +8,7 @@ calibrated friction plus the sensitivity collapses (calibrate.py), and the
 reference collapse again on 2 ranks. The steps run one at a time; their wall
 times go to reference_cases/run_all.json.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -25,8 +26,13 @@ HERE = Path(__file__).resolve().parent
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", choices=["openfoam", "liggghts"], default=None)
-    ap.add_argument("--meshes", type=int, nargs="+", default=[20, 40],
-                    help="cells per column width a for the OpenFOAM mesh study")
+    ap.add_argument(
+        "--meshes",
+        type=int,
+        nargs="+",
+        default=[20, 40],
+        help="cells per column width a for the OpenFOAM mesh study",
+    )
     ap.add_argument("--no-parallel", action="store_true", help="skip the 2-rank runs")
     ap.add_argument("--nice", type=int, default=0)
     a = ap.parse_args(argv)
@@ -43,6 +49,7 @@ def main(argv=None) -> int:
 
     if a.only in (None, "openfoam"):
         from reference_cases.openfoam_dam_break_2d import run as F
+
         for n in a.meshes:
             step(f"openfoam dx{n} np1", lambda n=n: F.run_case(n, 1, keep_fields=False))
         if not a.no_parallel:
@@ -51,16 +58,24 @@ def main(argv=None) -> int:
     if a.only in (None, "liggghts"):
         from reference_cases.liggghts_column_collapse_2d import calibrate as K
         from reference_cases.liggghts_column_collapse_2d import run as R
+
         step("liggghts calibration + reference + sensitivity", lambda: K.calibrate())
         if not a.no_parallel:
+
             def par():
                 mus, mur = R.calibrated()
                 R.run_collapse(R.Params(sliding=mus, rolling=mur), ranks=2, official=True)
+
             step("liggghts reference np2", par)
 
     total = round(time.perf_counter() - t_all, 1)
-    record = {"date_utc": C.now_iso(), "argv": sys.argv[1:], "steps": steps,
-              "total_wall_s": total, "host": C.host_facts()}
+    record = {
+        "date_utc": C.now_iso(),
+        "argv": sys.argv[1:],
+        "steps": steps,
+        "total_wall_s": total,
+        "host": C.host_facts(),
+    }
     path = HERE / "run_all.json"
     data = json.loads(path.read_text()) if path.exists() else {}
     data[a.only or "all"] = record

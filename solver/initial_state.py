@@ -33,8 +33,11 @@ def create_particles(scene: Scene, plan: Plan) -> ParticleSet:
         if "fixed" in plan.fields:
             extra["fixed"] = np.full(len(pts), bool(block.fixed))
         particles.append_owned(
-            x=pts, rho=rho, mass=rho * dx**dim,
-            material=np.full(len(pts), k, dtype=np.int32), **extra,
+            x=pts,
+            rho=rho,
+            mass=rho * dx**dim,
+            material=np.full(len(pts), k, dtype=np.int32),
+            **extra,
         )
     return particles
 
@@ -49,12 +52,12 @@ def geostatic_state(mat, pts, dx, g):
     top = np.full(keys.max() + 1, -np.inf)
     np.maximum.at(top, keys, pts[:, -1] + 0.5 * dx)
     depth = top[keys] - pts[:, -1]
-    sv = mat.density * g * depth                 # compression positive
+    sv = mat.density * g * depth  # compression positive
     sh = mat.k0 * sv
     p = (sv + 2.0 * sh) / 3.0
-    rho = mat.density * (1.0 + p / mat.bulk)     # inverse of eq. (17)
+    rho = mat.density * (1.0 + p / mat.bulk)  # inverse of eq. (17)
     s = np.zeros((len(pts), 6))
-    vertical = pts.shape[1] - 1                  # y in 2D, z in 3D
+    vertical = pts.shape[1] - 1  # y in 2D, z in 3D
     for a in range(3):
-        s[:, a] = p - (sv if a == vertical else sh)   # s = sigma + p delta, sigma = -stress magnitude
+        s[:, a] = p - (sv if a == vertical else sh)  # s = sigma + p delta, sigma = -stress magnitude
     return rho, s

@@ -76,7 +76,7 @@ def lf_drift(n, dt, x, v_half, x_ref, has_lo, lo, has_hi, hi, xsph=None):
     return moved2, reflected, depth
 
 
-@kernel(parallel=True, exact=True)   # exact: under fastmath np.isfinite folds to True and a NaN goes unseen
+@kernel(parallel=True, exact=True)  # exact: under fastmath np.isfinite folds to True and a NaN goes unseen
 def state_status(n, x, v_half, rho_half, lo, hi):
     """Worst status of the owned particles: 0 ok, 1 non-finite, 2 outside the domain box."""
     dim = x.shape[1]

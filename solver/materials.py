@@ -16,25 +16,32 @@ from .scene import Scene, Soil, Water
 PHASE_WATER = 0
 PHASE_SOIL = 1
 YIELD_ELASTIC, YIELD_MOHR_COULOMB, YIELD_DRUCKER_PRAGER = 0, 1, 2
-YIELD_IDS = {"elastic": YIELD_ELASTIC, "mohr_coulomb": YIELD_MOHR_COULOMB, "drucker_prager": YIELD_DRUCKER_PRAGER}
+YIELD_IDS = {
+    "elastic": YIELD_ELASTIC,
+    "mohr_coulomb": YIELD_MOHR_COULOMB,
+    "drucker_prager": YIELD_DRUCKER_PRAGER,
+}
 
 
 @dataclass(frozen=True)
 class SoilConstants:
     """Per-material soil constants (zeros for non-soil materials), indexed by material id."""
 
-    bulk: np.ndarray           # K of eq. (17)
-    shear: np.ndarray          # G of eq. (13)
-    tan_phi: np.ndarray        # Mohr-Coulomb, eq. (16)
+    bulk: np.ndarray  # K of eq. (17)
+    shear: np.ndarray  # G of eq. (13)
+    tan_phi: np.ndarray  # Mohr-Coulomb, eq. (16)
     cohesion: np.ndarray
-    alpha_phi: np.ndarray      # Drucker-Prager plane-strain fit (Bui et al. 2008, eq. 27)
+    alpha_phi: np.ndarray  # Drucker-Prager plane-strain fit (Bui et al. 2008, eq. 27)
     k_c: np.ndarray
-    alpha_psi: np.ndarray      # same fit with the dilatancy angle (non-associated flow)
-    yield_model: np.ndarray    # int32, YIELD_*
+    alpha_psi: np.ndarray  # same fit with the dilatancy angle (non-associated flow)
+    yield_model: np.ndarray  # int32, YIELD_*
 
 
 def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
-    cols = {k: np.zeros(len(names)) for k in ("bulk", "shear", "tan_phi", "cohesion", "alpha_phi", "k_c", "alpha_psi")}
+    cols = {
+        k: np.zeros(len(names))
+        for k in ("bulk", "shear", "tan_phi", "cohesion", "alpha_phi", "k_c", "alpha_psi")
+    }
     model = np.zeros(len(names), dtype=np.int32)
     any_soil = False
     for k, name in enumerate(names):
@@ -48,7 +55,7 @@ def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
         cols["shear"][k] = mat.shear_modulus
         cols["tan_phi"][k] = tphi
         cols["cohesion"][k] = mat.cohesion
-        cols["alpha_phi"][k] = tphi / np.sqrt(9.0 + 12.0 * tphi**2)     # Bui et al. (2008), plane strain
+        cols["alpha_phi"][k] = tphi / np.sqrt(9.0 + 12.0 * tphi**2)  # Bui et al. (2008), plane strain
         cols["k_c"][k] = 3.0 * mat.cohesion / np.sqrt(9.0 + 12.0 * tphi**2)
         cols["alpha_psi"][k] = tpsi / np.sqrt(9.0 + 12.0 * tpsi**2)
         model[k] = YIELD_IDS[mat.yield_model]
@@ -60,15 +67,15 @@ class MaterialTable:
     """Per-material constants indexed by material id (what the Numba kernels read)."""
 
     names: tuple[str, ...]
-    phase: np.ndarray          # int32
-    rho0: np.ndarray           # reference density (kg/m^3)
-    sound_speed: np.ndarray    # c (m/s)
-    eos_b: np.ndarray          # B = rho0 c^2 / lambda, seed eq. (9)
-    eos_exponent: np.ndarray   # lambda
-    viscosity: np.ndarray      # dynamic viscosity mu (Pa s), seed eq. (10)
-    av_alpha: np.ndarray       # Monaghan artificial viscosity, seed eq. (19)
+    phase: np.ndarray  # int32
+    rho0: np.ndarray  # reference density (kg/m^3)
+    sound_speed: np.ndarray  # c (m/s)
+    eos_b: np.ndarray  # B = rho0 c^2 / lambda, seed eq. (9)
+    eos_exponent: np.ndarray  # lambda
+    viscosity: np.ndarray  # dynamic viscosity mu (Pa s), seed eq. (10)
+    av_alpha: np.ndarray  # Monaghan artificial viscosity, seed eq. (19)
     av_beta: np.ndarray
-    soil: SoilConstants | None = None   # present only when the scene has a soil material
+    soil: SoilConstants | None = None  # present only when the scene has a soil material
 
     def index(self, name):
         return self.names.index(name)
@@ -90,7 +97,10 @@ def tait_density(p, rho0, b, exponent):
 def build_material_table(scene: Scene) -> MaterialTable:
     names = tuple(scene.materials)
     n = len(names)
-    cols = {k: np.zeros(n) for k in ("rho0", "sound_speed", "eos_b", "eos_exponent", "viscosity", "av_alpha", "av_beta")}
+    cols = {
+        k: np.zeros(n)
+        for k in ("rho0", "sound_speed", "eos_b", "eos_exponent", "viscosity", "av_alpha", "av_beta")
+    }
     phase = np.zeros(n, dtype=np.int32)
     for k, name in enumerate(names):
         mat = scene.materials[name]
@@ -105,7 +115,7 @@ def build_material_table(scene: Scene) -> MaterialTable:
         elif isinstance(mat, Soil):
             phase[k] = PHASE_SOIL
             cols["rho0"][k] = mat.density
-            cols["sound_speed"][k] = mat.sound_speed     # c = sqrt((K + 4G/3) / rho0)
+            cols["sound_speed"][k] = mat.sound_speed  # c = sqrt((K + 4G/3) / rho0)
         av = scene.artificial_viscosity(name)
         cols["av_alpha"][k], cols["av_beta"][k] = av.alpha, av.beta
     return MaterialTable(names=names, phase=phase, soil=build_soil_constants(scene, names), **cols)

@@ -19,10 +19,10 @@ from .config import kernel
 
 @dataclass
 class CellGrid:
-    origin: np.ndarray      # lower corner (float64[dim])
+    origin: np.ndarray  # lower corner (float64[dim])
     cell_size: float
-    shape: np.ndarray       # cells per axis (int64[dim])
-    offsets: np.ndarray     # neighbour-cell offsets, int64[3^dim, dim]
+    shape: np.ndarray  # cells per axis (int64[dim])
+    offsets: np.ndarray  # neighbour-cell offsets, int64[3^dim, dim]
 
     @classmethod
     def covering(cls, lo, hi, radius, pad):
@@ -86,7 +86,9 @@ def _neighbour_cell(c, offset, shape):
 
 
 @kernel(parallel=True)
-def _scan(targets, x, cells, cell_start, order, shape, offsets, radius2, phase, want, counts_or_start, index=None):
+def _scan(
+    targets, x, cells, cell_start, order, shape, offsets, radius2, phase, want, counts_or_start, index=None
+):
     """One scan of the 3^dim cells around each target. With index=None it counts the
     neighbours into counts_or_start[t]; with an index array it writes them from
     counts_or_start[t] on (Numba compiles the two variants separately)."""
@@ -118,9 +120,9 @@ def _scan(targets, x, cells, cell_start, order, shape, offsets, radius2, phase, 
 class NeighbourList:
     """Compressed rows: neighbours of targets[t] are index[start[t]:start[t+1]]."""
 
-    targets: np.ndarray   # int64 particle rows whose rates this list serves
-    start: np.ndarray     # int64[len(targets) + 1]
-    index: np.ndarray     # int32 neighbour rows (half the memory traffic of int64)
+    targets: np.ndarray  # int64 particle rows whose rates this list serves
+    start: np.ndarray  # int64[len(targets) + 1]
+    index: np.ndarray  # int32 neighbour rows (half the memory traffic of int64)
 
     def pairs(self):
         return len(self.index)
@@ -152,7 +154,17 @@ class CellList:
             phase = np.zeros(1, dtype=np.int32)
             want_phase = -1
         counts = np.empty(len(targets), dtype=np.int64)
-        args = (x, self.cells, self.cell_start, self.order, g.shape, g.offsets, radius * radius, phase, want_phase)
+        args = (
+            x,
+            self.cells,
+            self.cell_start,
+            self.order,
+            g.shape,
+            g.offsets,
+            radius * radius,
+            phase,
+            want_phase,
+        )
         _scan(targets, *args, counts)
         start = np.zeros(len(targets) + 1, dtype=np.int64)
         np.cumsum(counts, out=start[1:])

@@ -17,9 +17,9 @@ import numpy as np
 
 @dataclass(frozen=True)
 class FieldSpec:
-    components: int          # 0 for a scalar, else the size of the trailing axis
+    components: int  # 0 for a scalar, else the size of the trailing axis
     dtype: type
-    reason: str              # which term needs it (printed by --explain)
+    reason: str  # which term needs it (printed by --explain)
 
     def nbytes_per_particle(self):
         return np.dtype(self.dtype).itemsize * max(self.components, 1)
@@ -101,7 +101,7 @@ class ParticleSet:
     def permute_owned(self, order: np.ndarray):
         """Reorder (or subset) the owned rows, e.g. into cell order for memory locality."""
         n = len(order)
-        for name, arr in self.arrays.items():
+        for arr in self.arrays.values():
             arr[:n] = arr[order]
         self.n_owned = n
 

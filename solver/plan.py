@@ -29,10 +29,10 @@ class Term:
 @dataclass(frozen=True)
 class Pass:
     name: str
-    targets: str                 # phase whose particles get rates
-    neighbours: str              # phase of the neighbours summed over
+    targets: str  # phase whose particles get rates
+    neighbours: str  # phase of the neighbours summed over
     terms: tuple[Term, ...]
-    reads: tuple[str, ...]       # fields read from neighbours (ghosts/images must hold them)
+    reads: tuple[str, ...]  # fields read from neighbours (ghosts/images must hold them)
     writes: tuple[str, ...]
 
 
@@ -41,15 +41,15 @@ class Plan:
     dim: int
     fields: dict[str, FieldSpec]
     passes: list[Pass]
-    integrated: list[tuple[str, str, str]]     # (value, half-step value, rate)
+    integrated: list[tuple[str, str, str]]  # (value, half-step value, rate)
     constraints: list[Constraint]
-    image_vectors: tuple[str, ...]             # mirrored with sign s (x, v)
-    image_scalars: tuple[str, ...]             # copied each step
-    image_tensors: tuple[str, ...]             # mirrored with s_a s_b (eq. 23)
-    halo_fields: dict[str, tuple[str, ...]]    # when -> fields other ranks must send
+    image_vectors: tuple[str, ...]  # mirrored with sign s (x, v)
+    image_scalars: tuple[str, ...]  # copied each step
+    image_tensors: tuple[str, ...]  # mirrored with s_a s_b (eq. 23)
+    halo_fields: dict[str, tuple[str, ...]]  # when -> fields other ranks must send
     materials: MaterialTable
     options: dict = field(default_factory=dict)
-    post_drift_passes: list = field(default_factory=list)   # passes run after the drift (x_{n+1}, v_{n+1/2})
+    post_drift_passes: list = field(default_factory=list)  # passes run after the drift (x_{n+1}, v_{n+1/2})
 
     def has_pass(self, name):
         return any(p.name == name for p in self.passes)
@@ -85,7 +85,7 @@ def build_plan(scene: Scene) -> Plan:
     halo = {"every step, before the passes": ("x", "v", "rho"), "at rebuild": ("mass", "material", "id")}
     if water_ids:
         fields["p"] = FieldSpec(0, np.float64, "pressure, Tait EOS (eq. 9)")
-        options["mixed_water"] = len(water_ids) > 1   # per-pair material look-ups only if needed
+        options["mixed_water"] = len(water_ids) > 1  # per-pair material look-ups only if needed
         c_max = float(mats.sound_speed[water_ids].max())
         constraints.insert(0, Constraint("sound", "seed eq. (28)", num.cfl.sound * scene.h / c_max))
         terms = [Term("continuity", "seed eq. (6)"), Term("pressure gradient", "seed eqs. (7)-(9)")]
@@ -96,9 +96,16 @@ def build_plan(scene: Scene) -> Plan:
             fields["tau"] = FieldSpec(N_SYM, np.float64, "viscous stress (eqs. 10-11), symmetric")
             image_tensors.append("tau")
             halo["every step, after viscous_stress"] = ("tau",)
-            passes.append(Pass("viscous_stress", "water", "water",
-                               (Term("Newtonian viscous stress", "seed eqs. (10)-(11)"),),
-                               ("x", "v", "rho", "mass"), ("tau",)))
+            passes.append(
+                Pass(
+                    "viscous_stress",
+                    "water",
+                    "water",
+                    (Term("Newtonian viscous stress", "seed eqs. (10)-(11)"),),
+                    ("x", "v", "rho", "mass"),
+                    ("tau",),
+                )
+            )
             terms.append(Term("viscous stress divergence", "seed eqs. (7), (8), (10)"))
             reads.append("tau")
             constraints.append(Constraint("viscous", "seed eq. (30)", num.cfl.viscous * scene.h**2 / nu_max))
@@ -109,7 +116,16 @@ def build_plan(scene: Scene) -> Plan:
             options["xsph"] = True
             fields["xsph"] = FieldSpec(dim, np.float64, "XSPH correction (eq. 22)")
             terms.append(Term("XSPH", "seed eq. (22)"))
-        passes.append(Pass("fluid_rates", "water", "water", tuple(terms), tuple(reads), ("drho", "acc") + (("xsph",) if options["xsph"] else ())))
+        passes.append(
+            Pass(
+                "fluid_rates",
+                "water",
+                "water",
+                tuple(terms),
+                tuple(reads),
+                ("drho", "acc") + (("xsph",) if options["xsph"] else ()),
+            )
+        )
     integrated = [("v", "v_half", "acc"), ("rho", "rho_half", "drho")]
     post_drift = []
     options["symplectic_density"] = num.leapfrog == "symplectic_density" and bool(water_ids)
@@ -120,30 +136,53 @@ def build_plan(scene: Scene) -> Plan:
         integrated.remove(("rho", "rho_half", "drho"))
         del fields["rho_half"]
         fluid_pass = passes[-1]
-        passes[-1] = Pass(fluid_pass.name, fluid_pass.targets, fluid_pass.neighbours,
-                          tuple(t for t in fluid_pass.terms if t.name != "continuity"), fluid_pass.reads,
-                          tuple(w for w in fluid_pass.writes if w != "drho"))
-        post_drift.append(Pass("fluid_continuity", "water", "water",
-                               (Term("continuity with v at n+1/2, rho at whole steps", "seed eq. (6)"),),
-                               ("x", "v_half", "mass"), ("drho",)))
+        passes[-1] = Pass(
+            fluid_pass.name,
+            fluid_pass.targets,
+            fluid_pass.neighbours,
+            tuple(t for t in fluid_pass.terms if t.name != "continuity"),
+            fluid_pass.reads,
+            tuple(w for w in fluid_pass.writes if w != "drho"),
+        )
+        post_drift.append(
+            Pass(
+                "fluid_continuity",
+                "water",
+                "water",
+                (Term("continuity with v at n+1/2, rho at whole steps", "seed eq. (6)"),),
+                ("x", "v_half", "mass"),
+                ("drho",),
+            )
+        )
         halo["every step, after the drift"] = ("x", "v_half")
     image_scalars = ["rho"]
     options["soil"] = False
     if mats.ids_of_phase(PHASE_SOIL):
-        _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options)
+        _plan_soil(
+            scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options
+        )
     if any(b.fixed for b in scene.blocks):
         fields["fixed"] = FieldSpec(0, np.bool_, "wall particles of fixed blocks: never moved")
         halo["at rebuild"] = halo["at rebuild"] + ("fixed",)
     return Plan(
-        dim=dim, fields=fields, passes=passes,
+        dim=dim,
+        fields=fields,
+        passes=passes,
         integrated=integrated,
         constraints=constraints,
-        image_vectors=("x", "v"), image_scalars=tuple(image_scalars), image_tensors=tuple(image_tensors),
-        halo_fields=halo, materials=mats, options=options, post_drift_passes=post_drift,
+        image_vectors=("x", "v"),
+        image_scalars=tuple(image_scalars),
+        image_tensors=tuple(image_tensors),
+        halo_fields=halo,
+        materials=mats,
+        options=options,
+        post_drift_passes=post_drift,
     )
 
 
-def _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options):
+def _plan_soil(
+    scene, mats, fields, passes, constraints, integrated, image_scalars, image_tensors, halo, options
+):
     """Soil terms (seed sec. 2.2, 2.4; Bui et al. 2008): present only with a soil material."""
     num = scene.numerics
     soil_ids = mats.ids_of_phase(PHASE_SOIL)
@@ -159,47 +198,82 @@ def _plan_soil(scene, mats, fields, passes, constraints, integrated, image_scala
     plastic = [k for k in soil_ids if mats.soil.yield_model[k] != YIELD_ELASTIC]
     options["plastic_dilation"] = bool(plastic)
     if plastic:
-        fields["eps_vp"] = FieldSpec(0, np.float64, "plastic volumetric strain (tension cracking, dilatancy psi)")
-    stress_terms = [Term("mean stress", "seed eq. (17)"),
-                    Term("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager")]
+        fields["eps_vp"] = FieldSpec(
+            0, np.float64, "plastic volumetric strain (tension cracking, dilatancy psi)"
+        )
+    stress_terms = [
+        Term("mean stress", "seed eq. (17)"),
+        Term("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager"),
+    ]
     options["artificial_stress"] = num.artificial_stress > 0
     if options["artificial_stress"]:
         fields["art_stress"] = FieldSpec(N_SYM, np.float64, "artificial stress R (Gray et al. 2001)")
         image_tensors.append("art_stress")
         stress_terms.append(Term("artificial stress", "Gray, Monaghan & Swift (2001)"))
-    halo["every step, after soil_stress"] = ("mean_stress", "stress_dev") + (("art_stress",) if options["artificial_stress"] else ())
+    halo["every step, after soil_stress"] = ("mean_stress", "stress_dev") + (
+        ("art_stress",) if options["artificial_stress"] else ()
+    )
     passes.append(Pass("soil_stress", "soil", "soil", tuple(stress_terms), (), ("mean_stress", "stress_dev")))
-    terms = [Term("continuity", "seed eq. (6)"), Term("stress divergence", "seed eqs. (12), (20) without seepage"),
-             Term("Hooke-Jaumann deviatoric rate", "seed eqs. (13)-(15)")]
+    terms = [
+        Term("continuity", "seed eq. (6)"),
+        Term("stress divergence", "seed eqs. (12), (20) without seepage"),
+        Term("Hooke-Jaumann deviatoric rate", "seed eqs. (13)-(15)"),
+    ]
     options["soil_artificial_viscosity"] = any(mats.av_alpha[k] > 0 or mats.av_beta[k] > 0 for k in soil_ids)
     if options["soil_artificial_viscosity"]:
         terms.append(Term("Monaghan artificial viscosity", "seed eq. (19), alpha = beta = 1 for soil"))
-    passes.append(Pass("soil_rates", "soil", "soil", tuple(terms),
-                       ("x", "v", "rho", "mass", "mean_stress", "stress_dev"), ("drho", "acc", "dstress")))
+    passes.append(
+        Pass(
+            "soil_rates",
+            "soil",
+            "soil",
+            tuple(terms),
+            ("x", "v", "rho", "mass", "mean_stress", "stress_dev"),
+            ("drho", "acc", "dstress"),
+        )
+    )
     c_max = float(mats.sound_speed[soil_ids].max())
-    constraints.append(Constraint("soil sound", "seed eq. (28), c = sqrt((K + 4G/3) / rho0)", num.cfl.sound * scene.h / c_max))
+    constraints.append(
+        Constraint(
+            "soil sound", "seed eq. (28), c = sqrt((K + 4G/3) / rho0)", num.cfl.sound * scene.h / c_max
+        )
+    )
 
 
 def explain(plan: Plan, scene: Scene) -> str:
     """Human-readable plan: what will be computed, and what will not."""
-    lines = [f"Plan for scene '{scene.scene.name}' ({plan.dim}D, dx = {scene.scene.spacing:g} m, h = {scene.h:g} m)", ""]
+    lines = [
+        f"Plan for scene '{scene.scene.name}' ({plan.dim}D, dx = {scene.scene.spacing:g} m, h = {scene.h:g} "
+        "m)",
+        "",
+    ]
     lines.append("Materials:")
     for k, name in enumerate(plan.materials.names):
-        lines.append(f"  [{k}] {name}: phase {PHASE_NAMES[int(plan.materials.phase[k])]}, rho0 = {plan.materials.rho0[k]:g}, "
-                     f"c = {plan.materials.sound_speed[k]:g} m/s, mu = {plan.materials.viscosity[k]:g} Pa s, "
-                     f"AV alpha = {plan.materials.av_alpha[k]:g}, beta = {plan.materials.av_beta[k]:g}")
+        lines.append(
+            f"  [{k}] {name}: phase {PHASE_NAMES[int(plan.materials.phase[k])]}, rho0 = "
+            f"{plan.materials.rho0[k]:g}, "
+            f"c = {plan.materials.sound_speed[k]:g} m/s, mu = {plan.materials.viscosity[k]:g} Pa s, "
+            f"AV alpha = {plan.materials.av_alpha[k]:g}, beta = {plan.materials.av_beta[k]:g}"
+        )
     lines.append("")
     lines.append("Passes per step (after predict, image/halo refresh and EOS):")
     for k, p in enumerate(plan.passes, 1):
         lines.append(f"  {k}. {p.name}: {p.targets} <- {p.neighbours}")
         for t in p.terms:
             lines.append(f"       - {t.name} [{t.equation}]")
-        lines.append(f"       reads from neighbours: {', '.join(p.reads) or 'nothing'}; writes: {', '.join(p.writes)}")
+        lines.append(
+            f"       reads from neighbours: {', '.join(p.reads) or 'nothing'}; writes: {', '.join(p.writes)}"
+        )
     for p in plan.post_drift_passes:
-        lines.append(f"  after the drift: {p.name}: {p.targets} <- {p.neighbours}: "
-                     + "; ".join(f"{t.name} [{t.equation}]" for t in p.terms))
-    lines.append("  then gravity, and the leap-frog kick/drift (seed eqs. 24-27) of: "
-                 + ", ".join(v for v, _, _ in plan.integrated) + ", x")
+        lines.append(
+            f"  after the drift: {p.name}: {p.targets} <- {p.neighbours}: "
+            + "; ".join(f"{t.name} [{t.equation}]" for t in p.terms)
+        )
+    lines.append(
+        "  then gravity, and the leap-frog kick/drift (seed eqs. 24-27) of: "
+        + ", ".join(v for v, _, _ in plan.integrated)
+        + ", x"
+    )
     lines.append("")
     lines.append("Time-step constraints (dt = min):")
     for c in plan.constraints:
@@ -211,19 +285,37 @@ def explain(plan: Plan, scene: Scene) -> str:
         comps = "scalar" if spec.components == 0 else f"{spec.components} components"
         lines.append(f"  {name:16s} {np.dtype(spec.dtype).name:8s} {comps:14s} {spec.reason}")
     lines.append("")
-    lines.append("Image particles (walls): vectors " + ", ".join(plan.image_vectors) + "; scalars "
-                 + ", ".join(plan.image_scalars) + ("; tensors " + ", ".join(plan.image_tensors) if plan.image_tensors else ""))
+    lines.append(
+        "Image particles (walls): vectors "
+        + ", ".join(plan.image_vectors)
+        + "; scalars "
+        + ", ".join(plan.image_scalars)
+        + ("; tensors " + ", ".join(plan.image_tensors) if plan.image_tensors else "")
+    )
     if plan.options.get("hydrostatic_images"):
-        lines.append("  image pressure: source pressure + rho g . (x_image - x_source) (numerics.image_pressure = hydrostatic)")
+        lines.append(
+            "  image pressure: source pressure + rho g . (x_image - x_source) (numerics.image_pressure = "
+            "hydrostatic)"
+        )
     if plan.options.get("equilibrium_soil_images"):
-        lines.append("  soil image stress: source stress + static increment rho g . (x_image - x_source) of the normal "
-                     "stress along gravity (numerics.image_pressure = hydrostatic)")
+        lines.append(
+            "  soil image stress: source stress + static increment rho g . (x_image - x_source) of the "
+            "normal "
+            "stress along gravity (numerics.image_pressure = hydrostatic)"
+        )
     lines.append("Halo exchange (MPI):")
     for when, names in plan.halo_fields.items():
         lines.append(f"  {when}: {', '.join(names)}")
-    absent = [name for name, on in plan.options.items() if not on and not name.startswith(("mixed", "symplectic", "hydrostatic", "equilibrium"))]
+    absent = [
+        name
+        for name, on in plan.options.items()
+        if not on and not name.startswith(("mixed", "symplectic", "hydrostatic", "equilibrium"))
+    ]
     if absent:
         lines.append("")
-        lines.append("Not in this plan (not compiled, allocated or run): " + ", ".join(absent)
-                     + ("" if any(plan.materials.phase != PHASE_WATER) else ", soil stress, seepage"))
+        lines.append(
+            "Not in this plan (not compiled, allocated or run): "
+            + ", ".join(absent)
+            + ("" if any(plan.materials.phase != PHASE_WATER) else ", soil stress, seepage")
+        )
     return "\n".join(lines)

@@ -33,7 +33,7 @@ from .simulation import Simulation
 @dataclass
 class RunResult:
     out_dir: Path
-    status: str               # "completed" or "blew up: ..."
+    status: str  # "completed" or "blew up: ..."
     wall_time: float
     steps: int
     particles: int
@@ -49,10 +49,18 @@ class Progress:
         self.end_time = end_time
         self.last = 0.0
         if enabled:
-            from rich.progress import BarColumn, Progress as RichProgress, TextColumn, TimeRemainingColumn
-            self.bar = RichProgress(TextColumn("[bold]t = {task.fields[t]:.4f} / {task.total:.4f} s"), BarColumn(),
-                                    TextColumn("{task.fields[rate]:8.1f} steps/s  dt = {task.fields[dt]:.2e} ({task.fields[limit]})"),
-                                    TimeRemainingColumn(), transient=False)
+            from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
+            from rich.progress import Progress as RichProgress
+
+            self.bar = RichProgress(
+                TextColumn("[bold]t = {task.fields[t]:.4f} / {task.total:.4f} s"),
+                BarColumn(),
+                TextColumn(
+                    "{task.fields[rate]:8.1f} steps/s  dt = {task.fields[dt]:.2e} ({task.fields[limit]})"
+                ),
+                TimeRemainingColumn(),
+                transient=False,
+            )
             self.task = self.bar.add_task("run", total=end_time, t=0.0, rate=0.0, dt=0.0, limit="")
             self.bar.start()
             self.t0 = time.perf_counter()
@@ -129,7 +137,7 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
     except BlowUpError as exc:
         status = f"blew up: {exc}"
         raise
-    except Exception as exc:      # MPI: a failure on one rank ends every rank now (no hang in a collective)
+    except Exception as exc:  # MPI: a failure on one rank ends every rank now (no hang in a collective)
         comm.fail(exc)
         raise
     finally:
@@ -137,15 +145,27 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
         wall = time.perf_counter() - t0
         n = comm.sum(sim.particles.n_owned)
         rate = sim.step_count * n / wall if wall > 0 else 0.0
-        summary = {"status": status, "wall_time_s": wall, "steps": sim.step_count, "particles": n,
-                   "particle_steps_per_second": rate, "neighbour_rebuilds": sim.rebuilds,
-                   "wall_reflections": comm.sum(sim.wall_reflections), "simulated_time_s": sim.t}
+        summary = {
+            "status": status,
+            "wall_time_s": wall,
+            "steps": sim.step_count,
+            "particles": n,
+            "particle_steps_per_second": rate,
+            "neighbour_rebuilds": sim.rebuilds,
+            "wall_reflections": comm.sum(sim.wall_reflections),
+            "simulated_time_s": sim.t,
+        }
         if write and comm.is_root():
             for w in writers:
                 if isinstance(w, Hdf5Series):
                     w.finish(**summary)
             atomic_write_text(out_dir / "run.json", json.dumps(summary, indent=2) + "\n")
             if scene.output.render and last:
-                render_snapshot(last, out_dir / "final.png", scalar=scene.output.render_field,
-                                title=f"{scene.scene.name}  t = {sim.t:.4f} s", domain=(scene.domain.min, scene.domain.max))
+                render_snapshot(
+                    last,
+                    out_dir / "final.png",
+                    scalar=scene.output.render_field,
+                    title=f"{scene.scene.name}  t = {sim.t:.4f} s",
+                    domain=(scene.domain.min, scene.domain.max),
+                )
     return RunResult(out_dir, status, wall, sim.step_count, n, rate, sim)

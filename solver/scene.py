@@ -50,10 +50,16 @@ class Walls(Strict):
     y_max: WallKind | None = None
     z_min: WallKind | None = None
     z_max: WallKind | None = None
-    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)] | None = None   # degrees, Coulomb friction of "frictional" walls (required for them)
+    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)] | None = (
+        None  # degrees, Coulomb friction of "frictional" walls (required for them)
+    )
 
     def kinds(self):
-        return [k for k in (self.x_min, self.x_max, self.y_min, self.y_max, self.z_min, self.z_max) if k is not None]
+        return [
+            k
+            for k in (self.x_min, self.x_max, self.y_min, self.y_max, self.z_min, self.z_max)
+            if k is not None
+        ]
 
 
 class Water(Strict):
@@ -80,11 +86,13 @@ class Soil(Strict):
     density: Positive
     youngs_modulus: Positive
     poisson_ratio: Annotated[float, Field(ge=0.0, lt=0.5)]
-    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)]   # degrees
+    friction_angle: Annotated[float, Field(ge=0.0, lt=90.0)]  # degrees
     cohesion: NonNegative
-    dilatancy_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0   # degrees (Drucker-Prager only)
+    dilatancy_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0  # degrees (Drucker-Prager only)
     yield_model: Literal["mohr_coulomb", "drucker_prager", "elastic"] = "mohr_coulomb"
-    bulk_modulus: Positive | None = None   # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
+    bulk_modulus: Positive | None = (
+        None  # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
+    )
 
     @property
     def shear_modulus(self):
@@ -102,7 +110,7 @@ class Soil(Strict):
 
     @property
     def k0(self):
-        return 1.0 - np.sin(np.radians(self.friction_angle))   # Jaky (1944)
+        return 1.0 - np.sin(np.radians(self.friction_angle))  # Jaky (1944)
 
 
 Material = Annotated[Union[Water, Soil], Field(discriminator="model")]
@@ -115,8 +123,8 @@ class RectangleBlock(Strict):
     min: list[float]
     max: list[float]
     hydrostatic: bool = False
-    geostatic: bool = False        # soil: start at sigma_v = rho g depth, sigma_h = K0 sigma_v
-    fixed: bool = False            # wall particles: never moved, contribute to neighbour sums
+    geostatic: bool = False  # soil: start at sigma_v = rho g depth, sigma_h = K0 sigma_v
+    fixed: bool = False  # wall particles: never moved, contribute to neighbour sums
 
 
 class PolygonBlock(Strict):
@@ -154,9 +162,9 @@ class Numerics(Strict):
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
     leapfrog: Literal["seed", "symplectic_density"] = "seed"
     image_pressure: Literal["mirror", "hydrostatic"] = "mirror"
-    artificial_stress: NonNegative = 0.0          # soil tensile-instability remedy, epsilon of Gray et al. (2001)
-    artificial_stress_exponent: Positive = 2.55   # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
-    settling_time: NonNegative = 0.0              # s of kinetic-damping settling before release (t = 0); 0 = off
+    artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
+    artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
+    settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off
 
 
 class Output(Strict):
@@ -171,8 +179,10 @@ class Output(Strict):
 class Parallel(Strict):
     """MPI domain decomposition (solver/parallel): ignored by serial runs."""
 
-    rebalance_every: Annotated[int, Field(ge=0)] = 100          # steps between load checks; 0 = never
-    imbalance_threshold: Annotated[float, Field(ge=1.0)] = 1.1  # new cuts when max/mean particles exceeds this
+    rebalance_every: Annotated[int, Field(ge=0)] = 100  # steps between load checks; 0 = never
+    imbalance_threshold: Annotated[float, Field(ge=1.0)] = (
+        1.1  # new cuts when max/mean particles exceeds this
+    )
 
 
 class Scene(Strict):
@@ -222,7 +232,11 @@ class _Inconsistent(ValueError):
 def _check_consistency(s: Scene):
     """Checks that span several keys; each raises with the key a user must edit."""
     dim, dx = s.dim, s.scene.spacing
-    for key, vec in (("scene.gravity", s.scene.gravity), ("domain.min", s.domain.min), ("domain.max", s.domain.max)):
+    for key, vec in (
+        ("scene.gravity", s.scene.gravity),
+        ("domain.min", s.domain.min),
+        ("domain.max", s.domain.max),
+    ):
         if len(vec) != dim:
             raise _Inconsistent(key, f"needs {dim} components for a {dim}D scene, got {len(vec)}")
     lo, hi = np.array(s.domain.min), np.array(s.domain.max)
@@ -230,13 +244,17 @@ def _check_consistency(s: Scene):
         raise _Inconsistent("domain.max", "must be greater than domain.min in every direction")
     reach = 2.0 * s.h * (1.0 + s.numerics.neighbour_skin / 2.0)
     if np.any(hi - lo < 2.0 * reach):
-        raise _Inconsistent("domain", f"must be at least {2 * reach:.4g} m wide in every direction (two kernel supports)")
+        raise _Inconsistent(
+            "domain", f"must be at least {2 * reach:.4g} m wide in every direction (two kernel supports)"
+        )
     for axis in "xyz"[dim:]:
         for side in ("min", "max"):
             if getattr(s.walls, f"{axis}_{side}") is not None:
                 raise _Inconsistent(f"walls.{axis}_{side}", f"no {axis} axis in a {dim}D scene")
     if "frictional" in s.walls.kinds() and s.walls.friction_angle is None:
-        raise _Inconsistent("walls.friction_angle", "required for a 'frictional' wall (the literature gives no default)")
+        raise _Inconsistent(
+            "walls.friction_angle", "required for a 'frictional' wall (the literature gives no default)"
+        )
     if not s.materials:
         raise _Inconsistent("materials", "at least one material is needed")
     if not s.blocks:
@@ -245,7 +263,9 @@ def _check_consistency(s: Scene):
     for k, block in enumerate(s.blocks):
         key = f"blocks[{k}]"
         if block.material not in s.materials:
-            raise _Inconsistent(f"{key}.material", f"unknown material '{block.material}' (known: {', '.join(s.materials)})")
+            raise _Inconsistent(
+                f"{key}.material", f"unknown material '{block.material}' (known: {', '.join(s.materials)})"
+            )
         if isinstance(block, RectangleBlock):
             bmin, bmax = np.array(block.min, float), np.array(block.max, float)
             if len(bmin) != dim or len(bmax) != dim:
@@ -260,12 +280,16 @@ def _check_consistency(s: Scene):
             if corners.ndim != 2 or corners.shape[1] != 2 or len(corners) < 3:
                 raise _Inconsistent(f"{key}.vertices", "needs three or more [x, y] points")
         if getattr(block, "geostatic", False) and not isinstance(s.materials[block.material], Soil):
-            raise _Inconsistent(f"{key}.geostatic", "only soil blocks can start geostatic (water: hydrostatic)")
+            raise _Inconsistent(
+                f"{key}.geostatic", "only soil blocks can start geostatic (water: hydrostatic)"
+            )
         if np.any(corners < lo - eps) or np.any(corners > hi + eps):
             raise _Inconsistent(key, "lies (partly) outside the domain")
         extent = corners.max(axis=0) - corners.min(axis=0)
         if np.any(extent < dx):
-            raise _Inconsistent("scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)")
+            raise _Inconsistent(
+                "scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)"
+            )
     if s.numerics.leapfrog != "seed" and any(m.model != "water" for m in s.materials.values()):
         raise _Inconsistent("numerics.leapfrog", "symplectic_density is implemented for water-only scenes")
     for name in s.numerics.artificial_viscosity:
@@ -354,7 +378,7 @@ def load_scene(path, overrides=()) -> Scene:
         try:
             value = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
-            value = text.strip()          # a bare word is a string: walls.x_max=free_slip
+            value = text.strip()  # a bare word is a string: walls.x_max=free_slip
         table = raw
         *parents, last = key.strip().split(".")
         for part in parents:

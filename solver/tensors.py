@@ -28,7 +28,7 @@ def positive_part(a0, a1, a2, a3, a4, a5):
     a[0, 2] = a[2, 0] = a5
     q = np.eye(3)
     scale = abs(a0) + abs(a1) + abs(a2) + abs(a3) + abs(a4) + abs(a5)
-    for _sweep in range(12):                       # quadratic convergence: 4-6 sweeps reach round-off
+    for _sweep in range(12):  # quadratic convergence: 4-6 sweeps reach round-off
         off = abs(a[0, 1]) + abs(a[1, 2]) + abs(a[0, 2])
         if off <= 1e-15 * scale:
             break
@@ -39,15 +39,15 @@ def positive_part(a0, a1, a2, a3, a4, a5):
             t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
             c = 1.0 / np.sqrt(t * t + 1.0)
             s = t * c
-            for k in range(3):                     # a <- a J (columns p, r)
+            for k in range(3):  # a <- a J (columns p, r)
                 akp, akr = a[k, p], a[k, r]
                 a[k, p] = c * akp - s * akr
                 a[k, r] = s * akp + c * akr
-            for k in range(3):                     # a <- J^T a (rows p, r)
+            for k in range(3):  # a <- J^T a (rows p, r)
                 apk, ark = a[p, k], a[r, k]
                 a[p, k] = c * apk - s * ark
                 a[r, k] = s * apk + c * ark
-            for k in range(3):                     # q <- q J: columns are the eigenvectors
+            for k in range(3):  # q <- q J: columns are the eigenvectors
                 qkp, qkr = q[k, p], q[k, r]
                 q[k, p] = c * qkp - s * qkr
                 q[k, r] = s * qkp + c * qkr

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 class Constraint:
     name: str
     equation: str
-    constant_dt: float | None   # None: depends on the state (force)
+    constant_dt: float | None  # None: depends on the state (force)
 
 
 class TimeStepper:

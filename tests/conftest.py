@@ -28,5 +28,5 @@ def write_scene(tmp_path, text, name="scene.toml"):
     return path
 
 
-SCOURSPH = [sys.executable, "-m", "solver.cli"]
+SCOURSPH = [sys.executable, "-m", "scoursph"]
 ENV = {**os.environ, "NUMBA_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}

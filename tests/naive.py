@@ -42,7 +42,7 @@ def tait(rho, rho0, b, gamma):
 def velocity_gradient(i, x, v, rho, mass, h, dim, nbrs):
     g = np.zeros((dim, dim))
     for j in nbrs:
-        g += mass[j] / rho[j] * np.outer(grad_w(x[i], x[j], h, dim), v[j] - v[i])   # g[a, b] = dv^b/dx^a
+        g += mass[j] / rho[j] * np.outer(grad_w(x[i], x[j], h, dim), v[j] - v[i])  # g[a, b] = dv^b/dx^a
     return g
 
 
@@ -64,7 +64,9 @@ def sym_to_full(c, dim):
     return full[:dim, :dim]
 
 
-def fluid_rates(targets, x, v, rho, p, mass, c, h, dim, nbr_lists, tau=None, alpha=0.0, beta=0.0, xsph_eps=0.0):
+def fluid_rates(
+    targets, x, v, rho, p, mass, c, h, dim, nbr_lists, tau=None, alpha=0.0, beta=0.0, xsph_eps=0.0
+):
     """Seed eqs. (6), (7) with sigma = -p I + tau, (19) with beta phi^2, (22)."""
     drho = np.zeros(len(x))
     acc = np.zeros((len(x), dim))

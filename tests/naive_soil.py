@@ -2,7 +2,6 @@
 from the equations with full 3x3 matrices (tests/naive.py holds the water twins)."""
 
 import numpy as np
-
 from naive import cubic_spline, grad_w
 
 IDX = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]
@@ -42,7 +41,7 @@ def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0):
     k_c = 3 * c / np.sqrt(9 + 12 * tphi**2)
     a_psi = tpsi / np.sqrt(9 + 12 * tpsi**2)
     I1 = -3 * p
-    if -a_phi * I1 + k_c < 0:                  # beyond the apex: tension cracking
+    if -a_phi * I1 + k_c < 0:  # beyond the apex: tension cracking
         return k_c / (3 * a_phi) * -1.0, np.zeros(6)
     f = a_phi * I1 + np.sqrt(j2) - k_c
     if f <= 0:
@@ -81,7 +80,7 @@ def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55
                 f = cubic_spline(np.linalg.norm(xij), h, dim) / w_dx
                 T = T + f**art_n * (to_matrix(art[i]) + to_matrix(art[j]))[:dim, :dim]
             acc[i] += mass[j] * T @ gw
-            L[:dim, :dim] += mass[j] / rho[j] * np.outer(v[j] - v[i], gw)   # dv^a/dx^b
+            L[:dim, :dim] += mass[j] / rho[j] * np.outer(v[j] - v[i], gw)  # dv^a/dx^b
         eps = 0.5 * (L + L.T)
         dev = eps - np.trace(eps) / 3 * np.eye(3)
         ds[i] = to_voigt(2 * G * dev) + jaumann(s[i], L)

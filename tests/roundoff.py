@@ -36,21 +36,22 @@ def roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha):
     bug (a missing ghost or image) gives errors near dt g N ~ 1e-1 m/s, ten orders above.
     """
     from solver.kernels import cubic_spline_dwdr, cubic_spline_normalisation
+
     u = 2.0**-53
     dx = spacing
     h = 1.3 * dx
-    radius = 2.25 * h                       # 2h + skin (0.25 h)
+    radius = 2.25 * h  # 2h + skin (0.25 h)
     dim = state["x"].shape[1]
     k = math.ceil((math.pi if dim == 2 else 4.0 * math.pi / 3.0) * (radius / dx) ** dim)
     gamma = k * u / (1 - k * u)
     norm = cubic_spline_normalisation(dim, h)
     i = np.arange(-3, 4) * dx
-    r = np.sqrt(sum(q ** 2 for q in np.meshgrid(*[i] * dim)))
-    G = sum(dx ** dim * abs(float(cubic_spline_dwdr(float(rr), h, norm))) for rr in r.ravel() if 0 < rr < 2 * h)
+    r = np.sqrt(sum(q**2 for q in np.meshgrid(*[i] * dim)))
+    G = sum(dx**dim * abs(float(cubic_spline_dwdr(float(rr), h, norm))) for rr in r.ravel() if 0 < rr < 2 * h)
     v_max = float(np.max(np.linalg.norm(state["v"], axis=1))) + 1e-3
     da = 2 * gamma * (2 * p_max / rho0 + 2 * alpha * c * v_max) * G
     dD = 2 * gamma * rho0 * 2 * v_max * G
-    n_dt = stats["t"]                      # N dt
+    n_dt = stats["t"]  # N dt
     S = 10.0
     tol_v = S * n_dt * (da + c / rho0 * dD)
     tol_rho = S * n_dt * (dD + rho0 / c * da)

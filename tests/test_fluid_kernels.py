@@ -1,11 +1,11 @@
 """Every parallel water kernel against its NumPy twin (tests/naive.py), and the physics
 they must keep: momentum conservation by the pair forces."""
 
+import naive
 import numpy as np
 import pytest
-
-import naive
 from conftest import disordered_lattice
+
 from solver.kernels import cubic_spline_normalisation
 from solver.neighbors import CellGrid, CellList
 from solver.physics import fluid
@@ -25,17 +25,24 @@ def setup(rng, dim=2, n_side=14):
     cells.bin(x, n)
     targets = np.arange(n, dtype=np.int64)
     nl = cells.neighbour_list(x, targets, radius)
-    lists = [nl.index[nl.start[t]:nl.start[t + 1]].tolist() for t in range(n)]
-    return dict(x=x, v=v, rho=rho, mass=mass, material=material, h=h, nl=nl, lists=lists, targets=targets, dim=dim)
+    lists = [nl.index[nl.start[t] : nl.start[t + 1]].tolist() for t in range(n)]
+    return dict(
+        x=x, v=v, rho=rho, mass=mass, material=material, h=h, nl=nl, lists=lists, targets=targets, dim=dim
+    )
 
 
 def test_tait_eos(rng):
     rho = 1000 * (1 + rng.uniform(-0.02, 0.02, 50))
     p = np.zeros(50)
-    fluid.tait_pressure(50, rho, np.zeros(50, np.int32), np.array([1000.0]), np.array([32142.857]), np.array([7.0]), p)
+    fluid.tait_pressure(
+        50, rho, np.zeros(50, np.int32), np.array([1000.0]), np.array([32142.857]), np.array([7.0]), p
+    )
     np.testing.assert_allclose(p, naive.tait(rho, 1000.0, 32142.857, 7.0), rtol=1e-12)
     # B = rho0 c^2 / lambda makes c the sound speed: dp/drho at rho0 = c^2 (seed 2.1)
-    c2 = (naive.tait(1000.0 + 1e-4, 1000, 1000 * 15**2 / 7, 7) - naive.tait(1000.0 - 1e-4, 1000, 1000 * 15**2 / 7, 7)) / 2e-4
+    c2 = (
+        naive.tait(1000.0 + 1e-4, 1000, 1000 * 15**2 / 7, 7)
+        - naive.tait(1000.0 - 1e-4, 1000, 1000 * 15**2 / 7, 7)
+    ) / 2e-4
     assert c2 == pytest.approx(225.0, rel=1e-6)
 
 
@@ -45,13 +52,30 @@ def test_viscous_stress_matches_twin(rng, dim):
     n = len(s["x"])
     tau = np.zeros((n, 6))
     norm = cubic_spline_normalisation(dim, s["h"])
-    fluid.viscous_stress(s["targets"], s["nl"].start, s["nl"].index, s["x"], s["v"], s["rho"], s["mass"], s["material"],
-                         np.array([1e-3]), s["h"], norm, tau, True if dim == 3 else None)
-    expected = naive.viscous_stress(s["targets"], s["x"], s["v"], s["rho"], s["mass"], 1e-3, s["h"], dim, s["lists"])
+    fluid.viscous_stress(
+        s["targets"],
+        s["nl"].start,
+        s["nl"].index,
+        s["x"],
+        s["v"],
+        s["rho"],
+        s["mass"],
+        s["material"],
+        np.array([1e-3]),
+        s["h"],
+        norm,
+        tau,
+        True if dim == 3 else None,
+    )
+    expected = naive.viscous_stress(
+        s["targets"], s["x"], s["v"], s["rho"], s["mass"], 1e-3, s["h"], dim, s["lists"]
+    )
     np.testing.assert_allclose(tau, expected, rtol=1e-10, atol=1e-14)
 
 
-@pytest.mark.parametrize("dim,terms", [(2, "pressure"), (2, "viscous"), (2, "av"), (2, "xsph"), (2, "all"), (3, "all")])
+@pytest.mark.parametrize(
+    "dim,terms", [(2, "pressure"), (2, "viscous"), (2, "av"), (2, "xsph"), (2, "all"), (3, "all")]
+)
 def test_fluid_rates_match_twin(rng, dim, terms):
     """Each optional term alone (2D), and all together in 2D and 3D: each combination is
     its own compiled specialisation, so each is checked against the twin."""
@@ -60,18 +84,50 @@ def test_fluid_rates_match_twin(rng, dim, terms):
     p = rng.normal(0, 200, n)
     tau = rng.normal(0, 1e-2, (n, 6)) if terms in ("viscous", "all") else None
     if tau is not None and dim == 2:
-        tau[:, 4:] = 0.0   # no out-of-plane shear in plane strain
+        tau[:, 4:] = 0.0  # no out-of-plane shear in plane strain
     av = terms in ("av", "all")
     eps = 0.5 if terms in ("xsph", "all") else 0.0
     drho, acc, xsph = np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim))
     c = np.array([15.0])
     norm = cubic_spline_normalisation(dim, s["h"])
-    fluid.fluid_rates(s["targets"], s["nl"].start, s["nl"].index, s["x"], s["v"], s["rho"], p, s["mass"], s["material"],
-                      c, s["h"], norm, drho, acc, tau,
-                      np.array([0.3]) if av else None, np.array([0.2]) if av else None,
-                      xsph if eps > 0 else None, eps, True if dim == 3 else None)
-    e_drho, e_acc, e_xsph = naive.fluid_rates(s["targets"], s["x"], s["v"], s["rho"], p, s["mass"], 15.0, s["h"], dim, s["lists"],
-                                              tau=tau, alpha=0.3 if av else 0, beta=0.2 if av else 0, xsph_eps=eps)
+    fluid.fluid_rates(
+        s["targets"],
+        s["nl"].start,
+        s["nl"].index,
+        s["x"],
+        s["v"],
+        s["rho"],
+        p,
+        s["mass"],
+        s["material"],
+        c,
+        s["h"],
+        norm,
+        drho,
+        acc,
+        tau,
+        np.array([0.3]) if av else None,
+        np.array([0.2]) if av else None,
+        xsph if eps > 0 else None,
+        eps,
+        True if dim == 3 else None,
+    )
+    e_drho, e_acc, e_xsph = naive.fluid_rates(
+        s["targets"],
+        s["x"],
+        s["v"],
+        s["rho"],
+        p,
+        s["mass"],
+        15.0,
+        s["h"],
+        dim,
+        s["lists"],
+        tau=tau,
+        alpha=0.3 if av else 0,
+        beta=0.2 if av else 0,
+        xsph_eps=eps,
+    )
     np.testing.assert_allclose(drho, e_drho, rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(acc, e_acc, rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(xsph, e_xsph, rtol=1e-10, atol=1e-14)
@@ -86,11 +142,30 @@ def test_pair_forces_conserve_linear_momentum(rng):
     tau = rng.normal(0, 1e-2, (n, 6))
     tau[:, 4:] = 0
     drho, acc, xsph = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2))
-    fluid.fluid_rates(s["targets"], s["nl"].start, s["nl"].index, s["x"], s["v"], s["rho"], p, s["mass"], s["material"],
-                      np.array([15.0]), s["h"], cubic_spline_normalisation(2, s["h"]), drho, acc, tau,
-                      np.array([1.0]), np.array([1.0]), xsph, 0.5)
+    fluid.fluid_rates(
+        s["targets"],
+        s["nl"].start,
+        s["nl"].index,
+        s["x"],
+        s["v"],
+        s["rho"],
+        p,
+        s["mass"],
+        s["material"],
+        np.array([15.0]),
+        s["h"],
+        cubic_spline_normalisation(2, s["h"]),
+        drho,
+        acc,
+        tau,
+        np.array([1.0]),
+        np.array([1.0]),
+        xsph,
+        0.5,
+    )
     total = (s["mass"][:, None] * acc).sum(axis=0)
     scale = np.abs(s["mass"][:, None] * acc).max()
     assert np.all(np.abs(total) < 1e-12 * scale * n)
-    # XSPH moves particles but keeps the centre of mass velocity: sum m_i xsph_i = 0 for equal masses / rho_j weights
+    # XSPH moves particles but keeps the centre of mass velocity: sum m_i xsph_i = 0 for equal masses / rho_j
+    # weights
     # is not exact (weights m_j/rho_j), so it is not asserted here.

@@ -1,9 +1,9 @@
 """Cubic spline (seed eq. 5 with the erratum): normalisation, compact support, gradient."""
 
+import naive
 import numpy as np
 import pytest
 
-import naive
 from solver.kernels import cubic_spline_dwdr, cubic_spline_normalisation, cubic_spline_w, kernel_values
 
 
@@ -12,8 +12,12 @@ def test_matches_the_printed_piecewise_form(dim):
     h = 0.37
     r = np.linspace(0, 2.5 * h, 101)
     norm = cubic_spline_normalisation(dim, h)
-    np.testing.assert_allclose([cubic_spline_w(x, h, norm) for x in r], naive.cubic_spline(r, h, dim), rtol=1e-13, atol=1e-13)
-    np.testing.assert_allclose([cubic_spline_dwdr(x, h, norm) for x in r], naive.cubic_spline_dwdr(r, h, dim), rtol=1e-12, atol=1e-10)
+    np.testing.assert_allclose(
+        [cubic_spline_w(x, h, norm) for x in r], naive.cubic_spline(r, h, dim), rtol=1e-13, atol=1e-13
+    )
+    np.testing.assert_allclose(
+        [cubic_spline_dwdr(x, h, norm) for x in r], naive.cubic_spline_dwdr(r, h, dim), rtol=1e-12, atol=1e-10
+    )
 
 
 @pytest.mark.parametrize("dim", [1, 2, 3])

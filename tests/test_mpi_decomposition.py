@@ -16,7 +16,9 @@ def _column(n_side=60, seed=1):
     """A disordered dam-break-like column: all particles in the left eighth of the tank."""
     rng = np.random.default_rng(seed)
     dx = 0.05715 / n_side
-    g = np.stack(np.meshgrid((np.arange(n_side) + 0.5) * dx, (np.arange(2 * n_side) + 0.5) * dx, indexing="ij"), -1)
+    g = np.stack(
+        np.meshgrid((np.arange(n_side) + 0.5) * dx, (np.arange(2 * n_side) + 0.5) * dx, indexing="ij"), -1
+    )
     return g.reshape(-1, 2) + rng.uniform(-0.2, 0.2, (2 * n_side * n_side, 2)) * dx
 
 
@@ -38,9 +40,9 @@ def test_bisection_balances_and_covers(size):
 def test_two_ranks_cut_the_long_axis_and_follow_the_flow():
     x = _column()
     d0 = bisect(x, 2, LO, HI)
-    assert d0.hi[0, 0] == d0.lo[1, 0] and np.isinf(d0.hi[0, 1])      # a slab cut across x
+    assert d0.hi[0, 0] == d0.lo[1, 0] and np.isinf(d0.hi[0, 1])  # a slab cut across x
     moved = x.copy()
-    moved[:, 0] *= 4.0                                                # the water has spread along the tank
+    moved[:, 0] *= 4.0  # the water has spread along the tank
     d1 = bisect(moved, 2, LO, HI)
     assert d1.hi[0, 0] > 3.5 * d0.hi[0, 0]
 
@@ -49,6 +51,7 @@ def test_replicated_and_distributed_cuts_agree():
     """Cuts from the whole set on one rank (the start-up path) equal the cuts that three
     'ranks' holding shares find with summed histograms (threads stand in for MPI ranks)."""
     import threading
+
     x = _column()
     whole = bisect(x, 4, LO, HI)
     shares = np.array_split(np.random.default_rng(3).permutation(len(x)), 3)
@@ -62,6 +65,7 @@ def test_replicated_and_distributed_cuts_agree():
             total = sum(slots)
             barrier.wait()
             return total
+
         results[k] = bisect(x[shares[k]], 4, LO, HI, allreduce=allreduce)
 
     threads = [threading.Thread(target=rank, args=(k,)) for k in range(3)]
@@ -80,7 +84,7 @@ def test_near_matches_brute_force():
     reach = 0.004
     for r in range(3):
         mask = d.near(x, r, reach)
-        clipped = np.clip(x, d.lo[r], d.hi[r])                       # nearest point of box r
+        clipped = np.clip(x, d.lo[r], d.hi[r])  # nearest point of box r
         brute = np.linalg.norm(x - clipped, axis=1) < reach
         np.testing.assert_array_equal(mask, brute)
 
@@ -88,9 +92,14 @@ def test_near_matches_brute_force():
 def test_pack_unpack_round_trip_mixed_dtypes():
     rng = np.random.default_rng(4)
     n = 50
-    arrays = {"x": rng.normal(size=(n, 2)), "rho": rng.normal(size=n), "id": np.arange(n, dtype=np.int64) * 7,
-              "material": rng.integers(0, 3, n).astype(np.int32), "fixed": rng.random(n) < 0.5,
-              "tau": rng.normal(size=(n, 6))}
+    arrays = {
+        "x": rng.normal(size=(n, 2)),
+        "rho": rng.normal(size=n),
+        "id": np.arange(n, dtype=np.int64) * 7,
+        "material": rng.integers(0, 3, n).astype(np.int32),
+        "fixed": rng.random(n) < 0.5,
+        "tau": rng.normal(size=(n, 6)),
+    }
     names = list(arrays)
     layout = row_layout(arrays, names)
     rows = np.array([3, 7, 7, 0, 49])
@@ -100,7 +109,9 @@ def test_pack_unpack_round_trip_mixed_dtypes():
     unpack(buf, out, layout, 10)
     for k in names:
         np.testing.assert_array_equal(out[k][10:15], arrays[k][rows])
-    d = unpack_dict(buf, {k: v.dtype for k, v in arrays.items()}, {k: v.shape[1:] for k, v in arrays.items()}, layout)
+    d = unpack_dict(
+        buf, {k: v.dtype for k, v in arrays.items()}, {k: v.shape[1:] for k, v in arrays.items()}, layout
+    )
     for k in names:
         np.testing.assert_array_equal(d[k], arrays[k][rows])
     empty = pack(arrays, layout, np.zeros(0, dtype=np.int64))

@@ -1,10 +1,10 @@
 """Cell-linked list + Verlet list against brute force, in 1D, 2D and 3D."""
 
+import naive
 import numpy as np
 import pytest
-
-import naive
 from conftest import disordered_lattice
+
 from solver.neighbors import CellGrid, CellList
 
 
@@ -19,7 +19,7 @@ def test_same_pairs_as_brute_force(dim, n_side, rng):
     nl = cells.neighbour_list(x, targets, radius)
     expected = naive.neighbours(x, targets, radius)
     for t in range(len(targets)):
-        assert sorted(nl.index[nl.start[t]:nl.start[t + 1]].tolist()) == expected[t]
+        assert sorted(nl.index[nl.start[t] : nl.start[t + 1]].tolist()) == expected[t]
 
 
 def test_phase_filter_and_targets_subset(rng):
@@ -30,7 +30,7 @@ def test_phase_filter_and_targets_subset(rng):
     targets = np.flatnonzero(phase == 0).astype(np.int64)
     nl = cells.neighbour_list(x, targets, 0.026, phase, want_phase=1)
     for t, i in enumerate(targets):
-        got = sorted(nl.index[nl.start[t]:nl.start[t + 1]].tolist())
+        got = sorted(nl.index[nl.start[t] : nl.start[t + 1]].tolist())
         assert got == [j for j in naive.neighbours(x, [i], 0.026)[0] if phase[j] == 1]
 
 

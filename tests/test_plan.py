@@ -1,6 +1,7 @@
 """The plan builds only what the scene calls for (no field, pass, exchange or dt limit more)."""
 
 from conftest import ROOT
+
 from solver.plan import build_plan
 from solver.simulation import Simulation
 from verification.common import scene_from_file
@@ -24,15 +25,19 @@ def test_water_only_scene_has_no_soil_field_or_pass():
 
 def test_water_only_run_compiles_no_soil_kernel():
     """A water-only run never calls (so never compiles) a soil kernel in this process."""
-    import subprocess, sys
-    code = ("from verification.common import scene_from_file\n"
-            "from solver.simulation import Simulation\n"
-            "import solver.physics.soil as soil\n"
-            "sim = Simulation(scene_from_file('dam_break_2d.toml', **{'scene.spacing': 0.05715/10}))\n"
-            "[sim.step() for _ in range(3)]\n"
-            "from numba.core.registry import CPUDispatcher\n"
-            "compiled = [n for n, f in vars(soil).items() if isinstance(f, CPUDispatcher) and f.signatures]\n"
-            "print('COMPILED', compiled)\n")
+    import subprocess
+    import sys
+
+    code = (
+        "from verification.common import scene_from_file\n"
+        "from solver.simulation import Simulation\n"
+        "import solver.physics.soil as soil\n"
+        "sim = Simulation(scene_from_file('dam_break_2d.toml', **{'scene.spacing': 0.05715/10}))\n"
+        "[sim.step() for _ in range(3)]\n"
+        "from numba.core.registry import CPUDispatcher\n"
+        "compiled = [n for n, f in vars(soil).items() if isinstance(f, CPUDispatcher) and f.signatures]\n"
+        "print('COMPILED', compiled)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert out.returncode == 0, out.stderr
     assert "COMPILED []" in out.stdout
@@ -43,7 +48,9 @@ def test_viscosity_off_removes_term_field_and_dt_limit():
     off = build_plan(small_dam_break(**{"numerics.viscous_stress": False}))
     assert on.has_pass("viscous_stress") and "tau" in on.fields
     assert not off.has_pass("viscous_stress") and "tau" not in off.fields
-    assert "viscous" in [c.name for c in on.constraints] and "viscous" not in [c.name for c in off.constraints]
+    assert "viscous" in [c.name for c in on.constraints] and "viscous" not in [
+        c.name for c in off.constraints
+    ]
     assert "tau" not in off.image_tensors and not any("tau" in v for v in off.halo_fields.values())
     terms = [t.name for p in off.passes for t in p.terms]
     assert "viscous stress divergence" not in terms
@@ -56,7 +63,9 @@ def test_xsph_off_removes_term_and_field():
 
 
 def test_artificial_viscosity_off_when_alpha_beta_zero():
-    off = build_plan(small_dam_break(**{"numerics.artificial_viscosity": {"water": {"alpha": 0.0, "beta": 0.0}}}))
+    off = build_plan(
+        small_dam_break(**{"numerics.artificial_viscosity": {"water": {"alpha": 0.0, "beta": 0.0}}})
+    )
     assert not off.options["artificial_viscosity"]
     assert "Monaghan artificial viscosity" not in [t.name for p in off.passes for t in p.terms]
 
@@ -64,19 +73,32 @@ def test_artificial_viscosity_off_when_alpha_beta_zero():
 def test_absent_terms_are_not_compiled_into_the_kernel():
     """The fluid kernel is specialised with None for absent terms: Numba prunes them."""
     from solver.physics import fluid
+
     sim = Simulation(small_dam_break(**{"numerics.viscous_stress": False, "numerics.xsph_epsilon": 0.0}))
     sim.step()
     sig = [s for s in fluid.fluid_rates.signatures if len(s) >= 15]
-    assert any(str(s[14]) == "none" and str(s[17]) == "none" for s in sig)   # tau and xsph are None
+    assert any(str(s[14]) == "none" and str(s[17]) == "none" for s in sig)  # tau and xsph are None
 
 
 def test_explain_lists_passes_terms_fields(capsys):
-    import subprocess, sys
-    out = subprocess.run([sys.executable, "-m", "solver.cli", "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--explain"],
-                         capture_output=True, text=True, cwd=ROOT)
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-m", "scoursph", "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--explain"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     assert out.returncode == 0
-    for text in ("fluid_rates", "continuity [seed eq. (6)]", "XSPH [seed eq. (22)]", "viscous [seed eq. (30)]",
-                 "bytes per particle", "Not in this plan"):
+    for text in (
+        "fluid_rates",
+        "continuity [seed eq. (6)]",
+        "XSPH [seed eq. (22)]",
+        "viscous [seed eq. (30)]",
+        "bytes per particle",
+        "Not in this plan",
+    ):
         assert text in out.stdout
     assert "stress_dev" not in out.stdout
 
@@ -103,16 +125,35 @@ def test_symplectic_density_option_moves_continuity_after_the_drift():
 
 def test_symplectic_density_refused_with_soil():
     import pytest
+
     from solver.errors import SceneError
+
     with pytest.raises(SceneError) as err:
         scene_from_file("column_collapse_2d.toml", **{"numerics.leapfrog": "symplectic_density"})
     assert err.value.key == "numerics.leapfrog"
 
 
 def test_hydrostatic_image_pressure_option_is_planned_and_explained():
-    import subprocess, sys
+    import subprocess
+    import sys
+
     plan = build_plan(small_dam_break(**{"numerics.image_pressure": "hydrostatic"}))
-    assert plan.options["hydrostatic_images"] and not build_plan(small_dam_break()).options["hydrostatic_images"]
-    out = subprocess.run([sys.executable, "-m", "solver.cli", "run", str(ROOT / "scenes" / "dam_break_2d.toml"), "--explain",
-                          "--set", 'numerics.image_pressure="hydrostatic"'], capture_output=True, text=True, cwd=ROOT)
+    assert (
+        plan.options["hydrostatic_images"] and not build_plan(small_dam_break()).options["hydrostatic_images"]
+    )
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "scoursph",
+            "run",
+            str(ROOT / "scenes" / "dam_break_2d.toml"),
+            "--explain",
+            "--set",
+            'numerics.image_pressure="hydrostatic"',
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     assert "image pressure: source pressure + rho g" in out.stdout

@@ -19,7 +19,7 @@ def test_soil_only_plan_has_no_water_term_or_field():
     assert all(p.targets == "soil" and p.neighbours == "soil" for p in plan.passes)
     assert not any(f in plan.fields for f in WATER_FIELDS)
     assert not any("seepage" in t.name for p in plan.passes for t in p.terms)
-    assert [c.name for c in plan.constraints] == ["force", "soil sound"]     # no water sound, no viscous limit
+    assert [c.name for c in plan.constraints] == ["force", "soil sound"]  # no water sound, no viscous limit
     assert ("stress_dev", "stress_dev_half", "dstress") in plan.integrated
     assert plan.image_tensors == ("stress_dev", "art_stress")
     sim = Simulation(small_collapse())
@@ -28,9 +28,10 @@ def test_soil_only_plan_has_no_water_term_or_field():
 
 def test_equilibrium_image_stress_option_is_planned_for_soil_only_and_explained():
     from solver.plan import explain
+
     scene = small_collapse(overrides={"numerics": {"image_pressure": "hydrostatic"}})
     on = build_plan(scene)
-    assert on.options["equilibrium_soil_images"] and not on.options["hydrostatic_images"]   # no water here
+    assert on.options["equilibrium_soil_images"] and not on.options["hydrostatic_images"]  # no water here
     assert not build_plan(small_collapse()).options["equilibrium_soil_images"]
     assert "soil image stress: source stress + static increment" in explain(on, scene)
 
@@ -59,7 +60,7 @@ def test_stress_images_mirror_by_eq23():
     sim = Simulation(small_collapse())
     for _ in range(30):
         sim.step()
-    sim.compute_rates()                 # images refreshed from the current sources
+    sim.compute_rates()  # images refreshed from the current sources
     ps = sim.particles
     src, sign, _ = sim.walls.tables()
     first = ps.n_local
@@ -69,7 +70,7 @@ def test_stress_images_mirror_by_eq23():
         i, j = first + k, src[k]
         sx, sy = sign[k]
         np.testing.assert_array_equal(s[i, :3], s[j, :3])
-        assert s[i, 3] == sx * s[j, 3]          # only the free-slip (x) wall reverses the shear
+        assert s[i, 3] == sx * s[j, 3]  # only the free-slip (x) wall reverses the shear
         assert ps["mean_stress"][i] == ps["mean_stress"][j]
         # composition over the walls crossed: the floor (no slip) flips both components,
         # the free-slip side wall flips only v_x

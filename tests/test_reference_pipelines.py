@@ -5,6 +5,7 @@ Without interFoam/liggghts on PATH the tool tests skip, unless
 SCOURSPH_REQUIRE_REFERENCE_TOOLS=1 (CI after reference_cases/install_tools.sh),
 in which case they fail.
 """
+
 from __future__ import annotations
 
 import math
@@ -24,8 +25,10 @@ REQUIRE = os.environ.get("SCOURSPH_REQUIRE_REFERENCE_TOOLS", "") == "1"
 def need(*programs: str) -> None:
     missing = [p for p in programs if shutil.which(p) is None]
     if missing:
-        msg = (f"reference tools not on PATH: {', '.join(missing)} "
-               f"(install: bash reference_cases/install_tools.sh)")
+        msg = (
+            f"reference tools not on PATH: {', '.join(missing)} "
+            f"(install: bash reference_cases/install_tools.sh)"
+        )
         if REQUIRE:
             pytest.fail(msg + "; SCOURSPH_REQUIRE_REFERENCE_TOOLS=1 makes this an error")
         pytest.skip(msg)
@@ -97,7 +100,7 @@ def test_liggghts_tiny_files(tiny_collapse):
     assert (out / "history.csv").read_text().splitlines()[1] == "t_s,runout_m,wall_height_m"
     assert (out / "final_profile.csv").read_text().splitlines()[1] == "x_m,height_m"
     e = tiny_collapse["entry"]
-    assert 200 <= e["n_grains"] <= 1000          # "a few hundred grains"
+    assert 200 <= e["n_grains"] <= 1000  # "a few hundred grains"
     # time step well within the stability limits
     assert e["timestep"]["dt_over_rayleigh"] < 0.2
     assert e["timestep"]["dt_over_hertz_contact"] < 0.1
@@ -147,12 +150,12 @@ def test_liggghts_tiny_two_ranks(tiny_collapse, tmp_path):
 def test_volume_height_of_a_uniform_layer():
     rng = np.random.default_rng(1)
     n, r, depth, phi = 4000, 0.0015, 0.012, 0.6
-    x = rng.uniform(r, 0.1 - r, n)          # grains touch neither x = 0 nor x = 0.1
-    h_true = n * 4 / 3 * np.pi * r ** 3 / (0.1 * depth * phi)
+    x = rng.uniform(r, 0.1 - r, n)  # grains touch neither x = 0 nor x = 0.1
+    h_true = n * 4 / 3 * np.pi * r**3 / (0.1 * depth * phi)
     xc, h = dem.volume_height(x, np.full(n, r), 0.15, depth, phi)
     inner = (xc > 0.01) & (xc < 0.09)
     assert abs(np.mean(h[inner]) / h_true - 1) < 0.03
-    assert abs(np.sum(h) * dem.BIN / (0.1 * h_true) - 1) < 1e-9   # volume kept exactly
+    assert abs(np.sum(h) * dem.BIN / (0.1 * h_true) - 1) < 1e-9  # volume kept exactly
     assert abs(dem.runout_from_profile(xc, h, 0.5 * h_true) - 0.1) < dem.BIN
 
 

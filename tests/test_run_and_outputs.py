@@ -8,8 +8,8 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 import pytest
-
 from conftest import ENV, ROOT, SCOURSPH
+
 from solver.output.hdf5_writer import Hdf5Series, read_metadata, read_series
 from solver.scene import parse_scene
 
@@ -17,7 +17,9 @@ DAM = (ROOT / "scenes" / "dam_break_2d.toml").read_text()
 
 
 def tiny_dam_break(tmp_path, extra=""):
-    text = DAM.replace("spacing = 0.00142875", "spacing = 0.005715").replace("end_time = 0.33", "end_time = 0.03")
+    text = DAM.replace("spacing = 0.00142875", "spacing = 0.005715").replace(
+        "end_time = 0.33", "end_time = 0.03"
+    )
     text = text.replace("interval = 0.01", "interval = 0.01") + extra
     path = tmp_path / "tiny.toml"
     path.write_text(text)
@@ -29,7 +31,13 @@ def finished_run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("run")
     scene = tiny_dam_break(tmp)
     out = tmp / "out"
-    proc = subprocess.run([*SCOURSPH, "run", str(scene), "--out", str(out), "--quiet"], capture_output=True, text=True, env=ENV, cwd=tmp)
+    proc = subprocess.run(
+        [*SCOURSPH, "run", str(scene), "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=tmp,
+    )
     return proc, out
 
 
@@ -49,10 +57,10 @@ def test_hdf5_series_has_metadata_and_every_snapshot(finished_run):
     series = read_series(out / "particles.h5")
     np.testing.assert_allclose([t for t, _ in series], [0.0, 0.01, 0.02, 0.03], atol=1e-12)
     for _, fields in series:
-        assert np.all(np.diff(fields["id"]) > 0)                     # sorted by global id
+        assert np.all(np.diff(fields["id"]) > 0)  # sorted by global id
         assert fields["position"].shape == (200, 2)
         assert {"velocity", "density", "pressure", "material", "rank"} <= set(fields)
-    assert np.abs(series[-1][1]["velocity"]).max() > 0.1             # the column is falling
+    assert np.abs(series[-1][1]["velocity"]).max() > 0.1  # the column is falling
 
 
 def test_saved_scene_reproduces_the_run_setup(finished_run):
@@ -63,6 +71,7 @@ def test_saved_scene_reproduces_the_run_setup(finished_run):
 
 def test_vtk_collection_points_at_readable_files(finished_run):
     import pyvista as pv
+
     _, out = finished_run
     datasets = ET.parse(out / "particles.pvd").getroot().findall(".//DataSet")
     assert len(datasets) == 4
@@ -72,6 +81,7 @@ def test_vtk_collection_points_at_readable_files(finished_run):
 
 def test_picture_is_not_blank(finished_run):
     import matplotlib.image as mpimg
+
     _, out = finished_run
     img = mpimg.imread(out / "final.png")
     assert img.shape[0] > 100 and img[..., :3].std() > 0.05
@@ -84,6 +94,7 @@ def test_crash_during_a_snapshot_keeps_the_earlier_ones(tmp_path, monkeypatch):
 
     def boom(*args, **kwargs):
         raise OSError("disk full")
+
     monkeypatch.setattr(h5py.Group, "create_dataset", boom)
     with pytest.raises(OSError):
         series.write(0.1, 10, fields)
@@ -98,10 +109,18 @@ def test_blow_up_stops_with_what_where_when_and_keeps_outputs(tmp_path):
     text = scene.read_text().replace("interval = 0.01", "times = [0.0, 0.03]")
     scene.write_text(text)
     out = tmp_path / "out"
-    proc = subprocess.run([*SCOURSPH, "run", str(scene), "--out", str(out), "--quiet"], capture_output=True, text=True, env=ENV, cwd=tmp_path)
+    proc = subprocess.run(
+        [*SCOURSPH, "run", str(scene), "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=tmp_path,
+    )
     assert proc.returncode == 1
-    assert "simulation stopped at t =" in proc.stderr and "step" in proc.stderr      # when
-    assert "particle id" in proc.stderr                                            # where
-    assert "crossed a wall" in proc.stderr or "non-finite" in proc.stderr or "collapsed" in proc.stderr  # what
-    assert [t for t, _ in read_series(out / "particles.h5")] == [0.0]              # what was written is kept
+    assert "simulation stopped at t =" in proc.stderr and "step" in proc.stderr  # when
+    assert "particle id" in proc.stderr  # where
+    assert (
+        "crossed a wall" in proc.stderr or "non-finite" in proc.stderr or "collapsed" in proc.stderr
+    )  # what
+    assert [t for t, _ in read_series(out / "particles.h5")] == [0.0]  # what was written is kept
     assert "blew up" in json.loads((out / "run.json").read_text())["status"]

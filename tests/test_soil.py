@@ -1,10 +1,10 @@
 """Soil kernels (solver/physics/soil.py) against hand-computed cases and NumPy twins."""
 
+import naive_soil as nv
 import numpy as np
 import pytest
-
-import naive_soil as nv
 from conftest import disordered_lattice
+
 from solver.kernels import cubic_spline_normalisation, cubic_spline_w
 from solver.neighbors import CellGrid, CellList
 from solver.physics import soil
@@ -15,7 +15,15 @@ DP, MC = soil.YIELD_DRUCKER_PRAGER, soil.YIELD_MOHR_COULOMB
 
 def params(phi, c, psi=0.0):
     t, tp = np.tan(np.radians(phi)), np.tan(np.radians(psi))
-    return (K, G, t, c, t / np.sqrt(9 + 12 * t * t), 3 * c / np.sqrt(9 + 12 * t * t), tp / np.sqrt(9 + 12 * tp * tp))
+    return (
+        K,
+        G,
+        t,
+        c,
+        t / np.sqrt(9 + 12 * t * t),
+        3 * c / np.sqrt(9 + 12 * t * t),
+        tp / np.sqrt(9 + 12 * tp * tp),
+    )
 
 
 def fast_map(p, s6, model, phi, c, psi=0.0):
@@ -27,7 +35,7 @@ def j2root(s6):
     return np.sqrt(0.5 * (s6[0] ** 2 + s6[1] ** 2 + s6[2] ** 2) + s6[3] ** 2 + s6[4] ** 2 + s6[5] ** 2)
 
 
-S_SHEAR = np.array([100.0, -100.0, 0.0, 50.0, 0.0, 0.0])      # sqrt(J2) = sqrt(1e4 + 2500) = 111.8 Pa
+S_SHEAR = np.array([100.0, -100.0, 0.0, 50.0, 0.0, 0.0])  # sqrt(J2) = sqrt(1e4 + 2500) = 111.8 Pa
 
 
 def test_elastic_state_is_unchanged():
@@ -48,12 +56,13 @@ def test_mohr_coulomb_scale_back_by_hand():
 
 
 def test_drucker_prager_associated_by_hand():
-    # phi = 19.8, c = 0, psi = 0: alpha_phi = tan / sqrt(9 + 12 tan^2) = 0.110813; limit 3 alpha p at p = 200 Pa
+    # phi = 19.8, c = 0, psi = 0: alpha_phi = tan / sqrt(9 + 12 tan^2) = 0.110813; limit 3 alpha p at p = 200
+    # Pa
     a = np.tan(np.radians(19.8)) / np.sqrt(9 + 12 * np.tan(np.radians(19.8)) ** 2)
     assert a == pytest.approx(0.110813, abs=1e-6)
     p, s, dvol = fast_map(200.0, S_SHEAR, DP, 19.8, 0.0)
-    assert p == 200.0 and dvol == 0.0                              # psi = 0: no plastic volume change
-    assert j2root(s) == pytest.approx(3 * a * 200.0, rel=1e-12)    # lands on f = 0
+    assert p == 200.0 and dvol == 0.0  # psi = 0: no plastic volume change
+    assert j2root(s) == pytest.approx(3 * a * 200.0, rel=1e-12)  # lands on f = 0
     np.testing.assert_allclose(s / j2root(s), S_SHEAR / j2root(S_SHEAR), rtol=1e-12)  # radial return
 
 
@@ -115,14 +124,17 @@ def test_jaumann_update_is_objective_under_rigid_rotation():
     (dt Omega)^4 ~ 1e-10 times the number of steps, far above round-off and far below any
     error of a non-objective update (which would leave s unchanged: error O(1))."""
     s0 = np.array([3.0, -1.0, -2.0, 0.7, 0.0, 0.0])
-    omega = 2.0                                       # rad/s about z: v = omega (-y, x)
+    omega = 2.0  # rad/s about z: v = omega (-y, x)
     W = np.array([[0, -omega, 0], [omega, 0, 0], [0, 0, 0.0]])
     rate = lambda s: np.array(soil.jaumann(*s, W[0, 1], W[0, 2], W[1, 2]))
     T, n = 0.6, 600
     dt = T / n
     s = s0.copy()
     for _ in range(n):
-        k1 = rate(s); k2 = rate(s + 0.5 * dt * k1); k3 = rate(s + 0.5 * dt * k2); k4 = rate(s + dt * k3)
+        k1 = rate(s)
+        k2 = rate(s + 0.5 * dt * k1)
+        k3 = rate(s + 0.5 * dt * k2)
+        k4 = rate(s + dt * k3)
         s = s + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     th = omega * T
     Q = np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]])
@@ -139,7 +151,9 @@ def _lists(x, h):
     return cl.neighbour_list(x, np.arange(len(x), dtype=np.int64), radius)
 
 
-@pytest.mark.parametrize("with_av,with_art,dim", [(False, False, 2), (True, False, 2), (True, True, 2), (True, True, 3)])
+@pytest.mark.parametrize(
+    "with_av,with_art,dim", [(False, False, 2), (True, False, 2), (True, True, 2), (True, True, 3)]
+)
 def test_soil_rates_match_twin(rng, with_av, with_art, dim):
     dx, h = 0.01, 0.013
     x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
@@ -149,13 +163,13 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
     p = rng.uniform(0, 3000, n)
     s = rng.normal(0, 500, (n, 6))
     if dim == 2:
-        s[:, 4:] = 0.0                                  # plane strain: no out-of-plane shear
+        s[:, 4:] = 0.0  # plane strain: no out-of-plane shear
     mass = rho * dx**dim
     art = rng.normal(0, 1e-4, (n, 6)) if with_art else None
     if with_art:
         if dim == 2:
             art[:, 4:] = 0.0
-        art[rng.random(n) < 0.5] = 0.0                  # compressed particles (R = 0): the kernel skips pairs of two
+        art[rng.random(n) < 0.5] = 0.0  # compressed particles (R = 0): the kernel skips pairs of two
     mat = np.zeros(n, dtype=np.int32)
     c = np.array([20.0])
     av = np.array([1.0]) if with_av else None
@@ -163,10 +177,33 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
     norm = cubic_spline_normalisation(dim, h)
     w_dx = cubic_spline_w(dx, h, norm)
     drho, acc, ds = np.zeros(n), np.zeros((n, dim)), np.zeros((n, 6))
-    soil.soil_rates(nl.targets, nl.start, nl.index, x, v, rho, p, s, mass, mat, c, np.array([G]), h, norm,
-                    drho, acc, ds, av, av, art, 2.55, 1.0 / w_dx)
-    d2, a2, s2 = nv.soil_rates(x, v, rho, p, s, mass, 20.0, G, h, 1.0 if with_av else 0.0, 1.0 if with_av else 0.0,
-                               art, 2.55, w_dx)
+    soil.soil_rates(
+        nl.targets,
+        nl.start,
+        nl.index,
+        x,
+        v,
+        rho,
+        p,
+        s,
+        mass,
+        mat,
+        c,
+        np.array([G]),
+        h,
+        norm,
+        drho,
+        acc,
+        ds,
+        av,
+        av,
+        art,
+        2.55,
+        1.0 / w_dx,
+    )
+    d2, a2, s2 = nv.soil_rates(
+        x, v, rho, p, s, mass, 20.0, G, h, 1.0 if with_av else 0.0, 1.0 if with_av else 0.0, art, 2.55, w_dx
+    )
     np.testing.assert_allclose(drho, d2, rtol=1e-9, atol=1e-9 * np.abs(d2).max())
     np.testing.assert_allclose(acc, a2, rtol=1e-9, atol=1e-9 * np.abs(a2).max())
     np.testing.assert_allclose(ds, s2, rtol=1e-9, atol=1e-9 * np.abs(s2).max())
@@ -176,14 +213,25 @@ def test_soil_stress_state_and_artificial_stress_match_twins(rng):
     n = 64
     rows = np.arange(n, dtype=np.int64)
     rho = 2000 * (1 + rng.uniform(-0.02, 0.02, n))
-    s = rng.normal(0, 500, (n, 6)); s[:, 4:] = 0
+    s = rng.normal(0, 500, (n, 6))
+    s[:, 4:] = 0
     s[:, :3] -= s[:, :3].mean(axis=1, keepdims=True)
     s0 = s.copy()
     mat = np.zeros(n, dtype=np.int32)
     pr = params(25.0, 20.0)
     mean = np.zeros(n)
-    soil.soil_stress_state(rows, rho, s, mat, np.array([2000.0]), *[np.array([q]) for q in pr],
-                           np.array([DP], dtype=np.int32), mean, None, False)
+    soil.soil_stress_state(
+        rows,
+        rho,
+        s,
+        mat,
+        np.array([2000.0]),
+        *[np.array([q]) for q in pr],
+        np.array([DP], dtype=np.int32),
+        mean,
+        None,
+        False,
+    )
     for i in range(n):
         pn, sn = nv.return_map(K * (rho[i] / 2000 - 1), s0[i], "drucker_prager", K, G, 25.0, 20.0)
         assert mean[i] == pytest.approx(pn, rel=1e-12, abs=1e-9)
@@ -192,7 +240,9 @@ def test_soil_stress_state_and_artificial_stress_match_twins(rng):
     p = rng.uniform(-2000, 2000, n)
     soil.artificial_stress(rows, rho, p, s0, 0.5, art)
     for i in range(n):
-        np.testing.assert_allclose(art[i], nv.artificial_stress(p[i], s0[i], rho[i], 0.5), rtol=1e-9, atol=1e-16)
+        np.testing.assert_allclose(
+            art[i], nv.artificial_stress(p[i], s0[i], rho[i], 0.5), rtol=1e-9, atol=1e-16
+        )
 
 
 def test_artificial_stress_in_3d_matches_twin(rng):
@@ -200,19 +250,24 @@ def test_artificial_stress_in_3d_matches_twin(rng):
     random states with all six components, and on states with repeated principal stresses
     (isotropic, axisymmetric, zero), where closed-form eigenvectors break down."""
     from solver.tensors import positive_part
+
     n = 64
     rows = np.arange(n, dtype=np.int64)
     rho = 2000 * (1 + rng.uniform(-0.02, 0.02, n))
     s = rng.normal(0, 500, (n, 6))
     s[:, :3] -= s[:, :3].mean(axis=1, keepdims=True)
     p = rng.uniform(-2000, 2000, n)
-    s[:3], p[:3] = 0.0, [-700.0, 0.0, 300.0]              # isotropic tension, zero, isotropic compression
-    s[3], p[3] = [200.0, -100.0, -100.0, 0, 0, 0], 0.0     # axisymmetric: two equal principal stresses
+    s[:3], p[:3] = 0.0, [-700.0, 0.0, 300.0]  # isotropic tension, zero, isotropic compression
+    s[3], p[3] = [200.0, -100.0, -100.0, 0, 0, 0], 0.0  # axisymmetric: two equal principal stresses
     art = np.zeros((n, 6))
     soil.artificial_stress(rows, rho, p, s, 0.5, art, True)
     for i in range(n):
-        np.testing.assert_allclose(art[i], nv.artificial_stress(p[i], s[i], rho[i], 0.5, dim=3), rtol=1e-9,
-                                   atol=1e-12 * 0.5 * np.abs(s[i]).sum() / rho[i] ** 2 + 1e-300)
+        np.testing.assert_allclose(
+            art[i],
+            nv.artificial_stress(p[i], s[i], rho[i], 0.5, dim=3),
+            rtol=1e-9,
+            atol=1e-12 * 0.5 * np.abs(s[i]).sum() / rho[i] ** 2 + 1e-300,
+        )
     sym = np.array([3.0, 1.0, -2.0, 0.5, -0.7, 1.1])
     lam, vec = np.linalg.eigh(nv.to_matrix(sym))
     expected = nv.to_voigt(sum(max(lam[a], 0) * np.outer(vec[:, a], vec[:, a]) for a in range(3)))
@@ -232,7 +287,7 @@ def test_single_shear_elastic_then_plastic_plateau():
     g = np.arange(-3, 4) * dx
     x = np.array([(a, b) for a in g for b in g])
     centre = int(np.argmin(np.linalg.norm(x, axis=1)))
-    rate = 2.0                                              # 1/s
+    rate = 2.0  # 1/s
     v = np.column_stack([rate * x[:, 1], np.zeros(len(x))])
     n = len(x)
     rho = np.full(n, 2650.0)
@@ -246,12 +301,29 @@ def test_single_shear_elastic_then_plastic_plateau():
     s = np.zeros(6)
     dt = 1e-5
     ds_rows = np.zeros((n, 6))
-    gamma_elastic_end = 3 * a_phi * p / G                    # s_xy reaches the limit at gamma = 3 a p / G
+    gamma_elastic_end = 3 * a_phi * p / G  # s_xy reaches the limit at gamma = 3 a p / G
     history = []
     for k in range(int(3 * gamma_elastic_end / (rate * dt))):
         S = np.tile(s, (n, 1))
-        soil.soil_rates(nl.targets, nl.start, nl.index, x, v, rho, np.full(n, p), S, mass, mat, np.array([20.0]),
-                        np.array([G]), h, norm, np.zeros(n), np.zeros((n, dim)), ds_rows)
+        soil.soil_rates(
+            nl.targets,
+            nl.start,
+            nl.index,
+            x,
+            v,
+            rho,
+            np.full(n, p),
+            S,
+            mass,
+            mat,
+            np.array([20.0]),
+            np.array([G]),
+            h,
+            norm,
+            np.zeros(n),
+            np.zeros((n, dim)),
+            ds_rows,
+        )
         s = s + dt * ds_rows[centre]
         out = soil.return_map(p, *s, DP, *pr)
         s = np.array(out[1:7])
@@ -262,5 +334,5 @@ def test_single_shear_elastic_then_plastic_plateau():
     early = gam < 0.5 * gamma_elastic_end
     slope = np.polyfit(gam[early], sxy[early], 1)[0]
     assert slope == pytest.approx(G, rel=0.02)
-    assert j2root(history[-1][1]) == pytest.approx(3 * a_phi * p, rel=1e-12)     # on the yield surface
-    assert np.abs(history[-1][1][:3]).max() < 1e-3 * 3 * a_phi * p                  # still pure shear
+    assert j2root(history[-1][1]) == pytest.approx(3 * a_phi * p, rel=1e-12)  # on the yield surface
+    assert np.abs(history[-1][1][:3]).max() < 1e-3 * 3 * a_phi * p  # still pure shear

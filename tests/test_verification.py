@@ -22,9 +22,13 @@ def test_still_water_stays_hydrostatic(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known defect: with the seed's alpha = 0.01 an acoustic mode grows "
-                   "exponentially in still water at H/40 after ~0.25 s (alpha = 0.1 is stable): the seed's half-step leap-frog "
-                   "is not symplectic (verification/leapfrog_stability.py); kept visible until fixed")
+@pytest.mark.xfail(
+    strict=True,
+    reason="known defect: with the seed's alpha = 0.01 an acoustic mode grows "
+    "exponentially in still water at H/40 after ~0.25 s (alpha = 0.1 is stable): the seed's half-step "
+    "leap-frog "
+    "is not symplectic (verification/leapfrog_stability.py); kept visible until fixed",
+)
 def test_still_water_stays_quiet_at_fine_resolution():
     res = hydrostatic.run(40)
     assert res.series["mach"].max() < 0.01
@@ -55,9 +59,12 @@ def test_symplectic_density_keeps_fine_still_water_quiet(fine_still_water_symple
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known defect of the seed's mirror images: an image carries its source's "
-                   "pressure, so the first layer has no hydrostatic support and settles onto the floor at H/40 "
-                   "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed")
+@pytest.mark.xfail(
+    strict=True,
+    reason="known defect of the seed's mirror images: an image carries its source's "
+    "pressure, so the first layer has no hydrostatic support and settles onto the floor at H/40 "
+    "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed",
+)
 def test_bottom_layer_stays_off_the_wall_at_fine_resolution(fine_still_water_symplectic):
     assert fine_still_water_symplectic.sim_reflections == 0
 
@@ -93,11 +100,14 @@ def test_column_collapse_matches_experiment_at_ci_resolution(collapse_ci):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known discrepancy: the SPH undisturbed-zone boundary lies ~1 cm from the "
-                   "experiment's failure line (RMS 8.4 / 10.6 / 11.7 mm at 5 / 4 / 2.5 mm against 3 mm: the error grows "
-                   "with refinement, so no discretisation allowance); the SPH shear band is 7-8 dx wide at every "
-                   "displacement or strain threshold and artificial viscosity does not change it "
-                   "(verification/results/column_collapse/README.md); kept visible until the model resolves it")
+@pytest.mark.xfail(
+    strict=True,
+    reason="known discrepancy: the SPH undisturbed-zone boundary lies ~1 cm from the "
+    "experiment's failure line (RMS 8.4 / 10.6 / 11.7 mm at 5 / 4 / 2.5 mm against 3 mm: the error grows "
+    "with refinement, so no discretisation allowance); the SPH shear band is 7-8 dx wide at every "
+    "displacement or strain threshold and artificial viscosity does not change it "
+    "(verification/results/column_collapse/README.md); kept visible until the model resolves it",
+)
 def test_column_collapse_failure_line(collapse_ci):
     check = next(c for c in collapse_ci.checks if c.metric == FAILURE_LINE)
     assert check.passed, check.line()

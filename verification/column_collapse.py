@@ -2,7 +2,8 @@
 
 A 0.20 m long x 0.10 m high column against the left wall collapses to +x. Compared with
 the experiment (digitised final free surface and failure line,
-verification/data/bui2008_profile.csv (copied from the shared reference data), from Bui et al. 2008 Fig. 10 as digitised
+verification/data/bui2008_profile.csv (copied from the shared reference data), from Bui et al. 2008 Fig. 10 as
+digitised
 by LandslideSIM/MaterialPointSolver.jl): runout, height at the wall, free-surface profile,
 failure line.
 
@@ -51,22 +52,38 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (GCI_SAFETY, RESULTS, CaseResult, Check, machine_load, report, richardson, save_figure,
-                     study_row, timed_samples, write_csv)
+from .common import (
+    GCI_SAFETY,
+    RESULTS,
+    CaseResult,
+    Check,
+    machine_load,
+    report,
+    richardson,
+    save_figure,
+    study_row,
+    timed_samples,
+    write_csv,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
-DATA = Path(os.environ.get("SCOURSPH_REFERENCE_DATA", Path(__file__).with_name("data"))) / "bui2008_profile.csv"
+DATA = (
+    Path(os.environ.get("SCOURSPH_REFERENCE_DATA", Path(__file__).with_name("data"))) / "bui2008_profile.csv"
+)
 LIGGGHTS = ROOT / "reference_cases" / "liggghts_column_collapse_2d" / "data"
-SOURCE = ("Bui, Fukagawa, Sako & Ohno (2008), Int. J. Numer. Anal. Meth. Geomech. 32:1537-1570, "
-          "aluminium-bar collapse; digitised data bui2008_profile.csv")
+SOURCE = (
+    "Bui, Fukagawa, Sako & Ohno (2008), Int. J. Numer. Anal. Meth. Geomech. 32:1537-1570, "
+    "aluminium-bar collapse; digitised data bui2008_profile.csv"
+)
 L0, H0 = 0.2, 0.1
-DEFAULT_RESOLUTION = 40                 # dx = 2.5 mm, 3200 particles, ~4.5 min: the finest of the study (coarser runs are too short, see the study)
-STUDY_RESOLUTIONS = (20, 25, 40)        # 5, 4, 2.5 mm
+# dx = 2.5 mm, 3200 particles, ~4.5 min: the finest of the study (coarser runs are too short, see the study)
+DEFAULT_RESOLUTION = 40
+STUDY_RESOLUTIONS = (20, 25, 40)  # 5, 4, 2.5 mm
 OUT = RESULTS / "column_collapse"
 STUDY_FILE = OUT / "resolution_study.csv"
-DIGITISATION = 0.003                    # m, CSV header
-FAILURE_THRESHOLD = 0.005               # m: "moved less than" for the undisturbed zone
+DIGITISATION = 0.003  # m, CSV header
+FAILURE_THRESHOLD = 0.005  # m: "moved less than" for the undisturbed zone
 METRICS = ("runout", "wall_height", "profile", "failure")
 
 
@@ -84,6 +101,7 @@ def load_reference(path=DATA):
 
 def scene_at(spacing, end_time=None, overrides=None):
     from solver.scene import deep_merge, parse_scene
+
     raw = tomllib.loads(SCENE.read_text())
     raw["scene"]["spacing"] = float(spacing)
     if end_time is not None:
@@ -118,7 +136,9 @@ def failure_line(x0, x, dx, threshold, at_initial=False):
     moved = np.linalg.norm(x - x0, axis=1)
     still = moved < threshold
     pos = x0 if at_initial else x
-    rows = np.floor(x0[:, 1] / dx).astype(int)            # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
+    rows = np.floor(x0[:, 1] / dx).astype(
+        int
+    )  # lattice rows sit at (i + 1/2) dx: floor, not round (half-to-even merges rows in pairs)
     ys, xs = [], []
     for r in np.unique(rows):
         sel = still & (rows == r)
@@ -145,6 +165,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     """Collapse at dx = H0 / resolution; returns a CaseResult (series: final profile and
     failure line, kinetic energy over time; checks against the experiment)."""
     from solver.physics.soil import yield_excess
+
     dx = spacing(resolution)
     scene = scene_at(dx, end_time, overrides)
     t_end = scene.scene.end_time
@@ -157,7 +178,8 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
 
     from solver.initial_state import create_particles
     from solver.plan import build_plan
-    start = create_particles(scene, build_plan(scene))       # initial positions, by id
+
+    start = create_particles(scene, build_plan(scene))  # initial positions, by id
     x0 = start["x"][: start.n_owned][np.argsort(start["id"][: start.n_owned])].copy()
     sim, ke, wall = timed_samples(scene, times, observe)
     ps = sim.particles
@@ -168,28 +190,46 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     px, py = surface_profile(x, dx)
     fx, fy = failure_line(x0, x, dx, threshold=max(dx, FAILURE_THRESHOLD))
     ke = np.array(ke)
-    series = {"t": times, "kinetic_energy": ke, "profile_x": px, "profile_y": py, "failure_x": fx, "failure_y": fy,
-              "runout": deposit_front(x, dx), "wall_height": float(py[0]), "x0": x0, "x": x,
-              "ke_final_over_peak": float(ke[-1] / ke.max()) if ke.max() > 0 else 0.0,
-              "max_yield_excess": float(excess.max()), "spacing": dx}
+    series = {
+        "t": times,
+        "kinetic_energy": ke,
+        "profile_x": px,
+        "profile_y": py,
+        "failure_x": fx,
+        "failure_y": fy,
+        "runout": deposit_front(x, dx),
+        "wall_height": float(py[0]),
+        "x0": x0,
+        "x": x,
+        "ke_final_over_peak": float(ke[-1] / ke.max()) if ke.max() > 0 else 0.0,
+        "max_yield_excess": float(excess.max()),
+        "spacing": dx,
+    }
     ref = load_reference()
     series.update(errors(series, ref))
     res = CaseResult("column_collapse", resolution, n, sim.step_count, wall, series)
     res.checks = checks(res, ref)
-    res.notes = [f"dx = {dx * 1000:g} mm, runout {series['runout']:.4f} m (experiment {ref['final_free_surface'][-1, 0]:.3f} m), "
-                 f"height at wall {series['wall_height']:.4f} m (experiment {ref['final_free_surface'][0, 1]:.3f} m), "
-                 f"farthest particle {x[:, 0].max() + 0.5 * dx:.4f} m"]
+    res.notes = [
+        f"dx = {dx * 1000:g} mm, runout {series['runout']:.4f} m (experiment "
+        f"{ref['final_free_surface'][-1, 0]:.3f} m), "
+        f"height at wall {series['wall_height']:.4f} m (experiment {ref['final_free_surface'][0, 1]:.3f} m), "
+        f"farthest particle {x[:, 0].max() + 0.5 * dx:.4f} m"
+    ]
     fit = extrapolated_runout()
     if fit is not None:
-        res.notes.append(f"resolution study: runout converges with observed order {fit[0]:.2f} to {fit[1]:.4f} m "
-                         f"(Richardson), {100 * (fit[1] / float(ref['final_free_surface'][-1, 0]) - 1):+.1f} % from the "
-                         f"experiment: the model error once the discretisation error is gone")
+        res.notes.append(
+            f"resolution study: runout converges with observed order {fit[0]:.2f} to {fit[1]:.4f} m "
+            f"(Richardson), {100 * (fit[1] / float(ref['final_free_surface'][-1, 0]) - 1):+.1f} % from the "
+            f"experiment: the model error once the discretisation error is gone"
+        )
     dem = liggghts_reference()
     if dem is not None:
-        res.notes.append(f"vs LIGGGHTS DEM ({dem['label']}): runout {series['runout'] - dem['runout']:+.4f} m "
-                         f"(DEM {dem['runout']:.3f} m, calibration sensitivity +/- {dem['runout_spread'] / 2:.3f} m), "
-                         f"free-surface RMS difference {dem_profile_rms(series, dem):.4f} m; DEM vs experiment runout "
-                         f"{dem['runout'] - float(ref['final_free_surface'][-1, 0]):+.4f} m")
+        res.notes.append(
+            f"vs LIGGGHTS DEM ({dem['label']}): runout {series['runout'] - dem['runout']:+.4f} m "
+            f"(DEM {dem['runout']:.3f} m, calibration sensitivity +/- {dem['runout_spread'] / 2:.3f} m), "
+            f"free-surface RMS difference {dem_profile_rms(series, dem):.4f} m; DEM vs experiment runout "
+            f"{dem['runout'] - float(ref['final_free_surface'][-1, 0]):+.4f} m"
+        )
     if out_dir is not None:
         res.figure = figure(res, ref, Path(out_dir) / f"column_collapse_r{resolution}.png")
     return res
@@ -201,16 +241,27 @@ def liggghts_reference():
     calibration runs (sensitivity.csv) is the DEM reference's own uncertainty."""
     if not (LIGGGHTS / "final_profile.csv").exists():
         return None
+
     def rows(name):
         with open(LIGGGHTS / name) as fh:
             return list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
+
     prof = rows("final_profile.csv")
     hist = rows("history.csv")
-    sens = [float(r["runout_m"]) for r in rows("sensitivity.csv")] if (LIGGGHTS / "sensitivity.csv").exists() else []
+    sens = (
+        [float(r["runout_m"]) for r in rows("sensitivity.csv")]
+        if (LIGGGHTS / "sensitivity.csv").exists()
+        else []
+    )
     with open(LIGGGHTS / "final_profile.csv") as fh:
         label = fh.readline().lstrip("# ").split(":")[0]
-    return {"x": np.array([float(r["x_m"]) for r in prof]), "height": np.array([float(r["height_m"]) for r in prof]),
-            "runout": float(hist[-1]["runout_m"]), "runout_spread": (max(sens) - min(sens)) if sens else 0.0, "label": label}
+    return {
+        "x": np.array([float(r["x_m"]) for r in prof]),
+        "height": np.array([float(r["height_m"]) for r in prof]),
+        "runout": float(hist[-1]["runout_m"]),
+        "runout_spread": (max(sens) - min(sens)) if sens else 0.0,
+        "label": label,
+    }
 
 
 def dem_profile_rms(series, dem):
@@ -221,10 +272,12 @@ def dem_profile_rms(series, dem):
 def errors(series, ref):
     """Signed runout and wall-height errors and RMS profile and failure-line errors (m)."""
     surf, fail = ref["final_free_surface"], ref["failure_line"]
-    return {"runout_error": series["runout"] - float(surf[-1, 0]),
-            "wall_height_error": series["wall_height"] - float(surf[0, 1]),
-            "profile_rms": float(np.sqrt(np.mean((profile_at(series, surf[:, 0]) - surf[:, 1]) ** 2))),
-            "failure_rms": float(np.sqrt(np.mean((failure_at(series, fail[:, 1]) - fail[:, 0]) ** 2)))}
+    return {
+        "runout_error": series["runout"] - float(surf[-1, 0]),
+        "wall_height_error": series["wall_height"] - float(surf[0, 1]),
+        "profile_rms": float(np.sqrt(np.mean((profile_at(series, surf[:, 0]) - surf[:, 1]) ** 2))),
+        "failure_rms": float(np.sqrt(np.mean((failure_at(series, fail[:, 1]) - fail[:, 0]) ** 2))),
+    }
 
 
 def discretization_error(resolution):
@@ -241,7 +294,7 @@ def discretization_error(resolution):
     return err
 
 
-STUDY_ERRORS = {"profile": "profile_rms_mm", "failure": "failure_rms_mm"}   # RMS errors against the experiment
+STUDY_ERRORS = {"profile": "profile_rms_mm", "failure": "failure_rms_mm"}  # RMS errors against the experiment
 
 
 def diverging_metrics():
@@ -265,7 +318,11 @@ def extrapolated_runout():
 def add_runout_extrapolation(rows):
     """Richardson order and limit of the runout over the study rows, and each row's distance to
     the limit (the runout's discretisation error); blank where no extrapolation is defensible."""
-    fit = richardson([r["spacing_mm"] for r in rows], [float(r["runout_m"]) for r in rows]) if len(rows) == 3 else None
+    fit = (
+        richardson([r["spacing_mm"] for r in rows], [float(r["runout_m"]) for r in rows])
+        if len(rows) == 3
+        else None
+    )
     for r in rows:
         r["runout_order"] = fit[0] if fit else ""
         r["runout_extrapolated_m"] = fit[1] if fit else ""
@@ -284,25 +341,51 @@ def checks(res, ref=None):
         if not disc:
             return " (no resolution study on file for this resolution: digitisation only)"
         if m in diverging:
-            return " only: the error grows with refinement in the resolution study, so no discretisation allowance"
+            return (
+                " only: the error grows with refinement in the resolution study,"
+                " so no discretisation allowance"
+            )
         return f" + discretisation error {d[m] * 1000:.1f} mm ({how.get(m, 'resolution study')})"
+
     dig = "digitisation +/- 3 mm (CSV header)"
     return [
         Check("runout error (m)", s["runout_error"], DIGITISATION + d["runout"], dig + note("runout")),
-        Check("height at wall error (m)", s["wall_height_error"], DIGITISATION + d["wall_height"], dig + note("wall_height")),
-        Check("free-surface RMS error (m)", s["profile_rms"], DIGITISATION + d["profile"], dig + note("profile")),
-        Check("failure-line RMS error in x (m)", s["failure_rms"], DIGITISATION + d["failure"], dig + note("failure")),
-        Check("kinetic energy final / peak", s["ke_final_over_peak"], 1e-2,
-              "deposit at rest: residual KE below 1 % of the peak (definition of the final state)"),
-        Check("max yield excess f/scale", max(s["max_yield_excess"], 0.0), 1e-9,
-              "return mapping: stress on or inside the yield surface (round-off)"),
+        Check(
+            "height at wall error (m)",
+            s["wall_height_error"],
+            DIGITISATION + d["wall_height"],
+            dig + note("wall_height"),
+        ),
+        Check(
+            "free-surface RMS error (m)", s["profile_rms"], DIGITISATION + d["profile"], dig + note("profile")
+        ),
+        Check(
+            "failure-line RMS error in x (m)",
+            s["failure_rms"],
+            DIGITISATION + d["failure"],
+            dig + note("failure"),
+        ),
+        Check(
+            "kinetic energy final / peak",
+            s["ke_final_over_peak"],
+            1e-2,
+            "deposit at rest: residual KE below 1 % of the peak (definition of the final state)",
+        ),
+        Check(
+            "max yield excess f/scale",
+            max(s["max_yield_excess"], 0.0),
+            1e-9,
+            "return mapping: stress on or inside the yield surface (round-off)",
+        ),
     ]
 
 
 def figure(res, ref, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     s = res.series
     x, x0 = s["x"], s["x0"]
     moved = np.linalg.norm(x - x0, axis=1)
@@ -310,13 +393,26 @@ def figure(res, ref, path):
     sc = ax.scatter(x[:, 0], x[:, 1], c=moved, s=max(0.5, 4 * (s["spacing"] / 0.005) ** 2), cmap="viridis")
     fig.colorbar(sc, ax=ax, label="displacement (m)")
     ax.plot(s["profile_x"], s["profile_y"], "b-", lw=1, label="SPH free surface")
-    ax.plot(s["failure_x"], s["failure_y"], "b--", lw=1, label=f"SPH failure line (moved < {FAILURE_THRESHOLD * 1000:g} mm)")
+    ax.plot(
+        s["failure_x"],
+        s["failure_y"],
+        "b--",
+        lw=1,
+        label=f"SPH failure line (moved < {FAILURE_THRESHOLD * 1000:g} mm)",
+    )
     su, f = ref["final_free_surface"], ref["failure_line"]
     ax.plot(su[:, 0], su[:, 1], "ro", ms=3, label="experiment, surface (Bui et al. 2008)")
     ax.plot(f[:, 0], f[:, 1], "rs", ms=3, mfc="none", label="experiment, failure line")
     dem = liggghts_reference()
     if dem is not None:
-        ax.plot(dem["x"], dem["height"], "-", color="darkorange", lw=1.2, label="LIGGGHTS DEM deposit (volume-equivalent)")
+        ax.plot(
+            dem["x"],
+            dem["height"],
+            "-",
+            color="darkorange",
+            lw=1.2,
+            label="LIGGGHTS DEM deposit (volume-equivalent)",
+        )
     ax.plot([0, L0, L0], [H0, H0, 0], "k:", lw=0.8, label="initial column")
     ax.axvline(s["runout"], color="b", lw=0.6)
     ax.set_aspect("equal")
@@ -324,7 +420,9 @@ def figure(res, ref, path):
     ax.set_ylim(0, 0.12)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"Column collapse, dx = {s['spacing'] * 1000:g} mm, t = {s['t'][-1]:g} s: runout {s['runout']:.3f} m")
+    ax.set_title(
+        f"Column collapse, dx = {s['spacing'] * 1000:g} mm, t = {s['t'][-1]:g} s: runout {s['runout']:.3f} m"
+    )
     ax.legend(fontsize=6, loc="upper right")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -337,10 +435,16 @@ def extrapolation_text(rows, experiment):
     if rows[0]["runout_order"] == "":
         return "Runout: no Richardson extrapolation (the three runouts are not monotone in dx).\n\n"
     p, r0 = float(rows[0]["runout_order"]), float(rows[0]["runout_extrapolated_m"])
-    return (f"Runout: observed order p = {p:.2f}; Richardson limit R_0 = {r0:.4f} m, {100 * (r0 / experiment - 1):+.1f} % "
-            f"from the experiment ({experiment:.3f} m); distance to R_0: "
-            + ", ".join(f"{1000 * float(r['runout_vs_extrapolated']):.1f} mm at {float(r['spacing_mm']):g} mm" for r in rows)
-            + ".\n\n")
+    return (
+        f"Runout: observed order p = {p:.2f}; Richardson limit R_0 = {r0:.4f} m, "
+        f"{100 * (r0 / experiment - 1):+.1f} % "
+        f"from the experiment ({experiment:.3f} m); distance to R_0: "
+        + ", ".join(
+            f"{1000 * float(r['runout_vs_extrapolated']):.1f} mm at {float(r['spacing_mm']):g} mm"
+            for r in rows
+        )
+        + ".\n\n"
+    )
 
 
 def accuracy_cost_figure(rows, experiment_runout, path):
@@ -348,8 +452,10 @@ def accuracy_cost_figure(rows, experiment_runout, path):
     point per spacing of the study, with the tolerance-free reference lines (digitisation,
     Richardson limit)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     wall = np.array([float(r["wall_time_s"]) for r in rows])
     dx = [float(r["spacing_mm"]) for r in rows]
     runout = np.abs(np.array([float(r["runout_m"]) for r in rows]) - experiment_runout) * 1000
@@ -363,8 +469,12 @@ def accuracy_cost_figure(rows, experiment_runout, path):
         limit = abs(float(rows[0]["runout_extrapolated_m"]) - experiment_runout) * 1000
         ax.axhline(limit, color="C0", ls=":", lw=1, label="runout error of the Richardson limit")
     ax.axhline(1000 * DIGITISATION, color="k", ls="--", lw=0.8, label="digitisation (3 mm)")
-    ax.set(xscale="log", xlabel="wall time (s, one thread)", ylabel="error (mm)",
-           title="Column collapse: error against cost")
+    ax.set(
+        xscale="log",
+        xlabel="wall time (s, one thread)",
+        ylabel="error (mm)",
+        title="Column collapse: error against cost",
+    )
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
@@ -379,50 +489,88 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     for r in resolutions:
         res = run(r, out_dir=out)
         results.append(res)
-        print(f"resolution {r} (dx = {spacing(r) * 1000:g} mm): runout {res.series['runout']:.4f} m, "
-              f"wall height {res.series['wall_height']:.4f} m, wall time {res.wall_time:.0f} s", flush=True)
+        print(
+            f"resolution {r} (dx = {spacing(r) * 1000:g} mm): runout {res.series['runout']:.4f} m, "
+            f"wall height {res.series['wall_height']:.4f} m, wall time {res.wall_time:.0f} s",
+            flush=True,
+        )
     ref = load_reference()
     surf, fail = ref["final_free_surface"], ref["failure_line"]
     fine, second = results[-1].series, (results[-2].series if len(results) > 1 else results[-1].series)
 
     def vs(a, b):
-        return {"runout": abs(a["runout"] - b["runout"]), "wall_height": abs(a["wall_height"] - b["wall_height"]),
-                "profile": float(np.sqrt(np.mean((profile_at(a, surf[:, 0]) - profile_at(b, surf[:, 0])) ** 2))),
-                "failure": float(np.sqrt(np.nanmean((failure_at(a, fail[:, 1]) - failure_at(b, fail[:, 1])) ** 2)))}
+        return {
+            "runout": abs(a["runout"] - b["runout"]),
+            "wall_height": abs(a["wall_height"] - b["wall_height"]),
+            "profile": float(np.sqrt(np.mean((profile_at(a, surf[:, 0]) - profile_at(b, surf[:, 0])) ** 2))),
+            "failure": float(
+                np.sqrt(np.nanmean((failure_at(a, fail[:, 1]) - failure_at(b, fail[:, 1])) ** 2))
+            ),
+        }
 
     rows = []
     for res in results:
         s = res.series
         d = vs(s, second if s is fine else fine)
-        rows.append({"resolution": res.resolution, "spacing_mm": 1000 * s["spacing"], "particles": res.particles,
-                     "steps": res.steps, "wall_time_s": res.wall_time, "runout_m": s["runout"],
-                     "runout_error_pct": 100 * s["runout_error"] / float(surf[-1, 0]), "wall_height_m": s["wall_height"],
-                     "profile_rms_mm": 1000 * s["profile_rms"], "failure_rms_mm": 1000 * s["failure_rms"],
-                     **{f"{m}_vs_finest": d[m] for m in METRICS}})
+        rows.append(
+            {
+                "resolution": res.resolution,
+                "spacing_mm": 1000 * s["spacing"],
+                "particles": res.particles,
+                "steps": res.steps,
+                "wall_time_s": res.wall_time,
+                "runout_m": s["runout"],
+                "runout_error_pct": 100 * s["runout_error"] / float(surf[-1, 0]),
+                "wall_height_m": s["wall_height"],
+                "profile_rms_mm": 1000 * s["profile_rms"],
+                "failure_rms_mm": 1000 * s["failure_rms"],
+                **{f"{m}_vs_finest": d[m] for m in METRICS},
+            }
+        )
     add_runout_extrapolation(rows)
     accuracy_cost_figure(rows, float(surf[-1, 0]), out / "accuracy_cost.png")
     write_csv(out / "resolution_study.csv", rows)
-    lines = ["| dx (mm) | particles | steps | runout (m) | runout error | height at wall (m) | profile RMS (mm) | "
-             "failure-line RMS (mm) | runout vs finest (mm) | wall time (s) |", "|" + "---|" * 10]
+    lines = [
+        "| dx (mm) | particles | steps | runout (m) | runout error | height at wall (m) | profile RMS (mm) | "
+        "failure-line RMS (mm) | runout vs finest (mm) | wall time (s) |",
+        "|" + "---|" * 10,
+    ]
     for r in rows:
-        lines.append(f"| {r['spacing_mm']:g} | {r['particles']} | {r['steps']} | {r['runout_m']:.4f} | {r['runout_error_pct']:+.1f} % | "
-                     f"{r['wall_height_m']:.4f} | {r['profile_rms_mm']:.1f} | {r['failure_rms_mm']:.1f} | "
-                     f"{1000 * r['runout_vs_finest']:.1f} | {r['wall_time_s']:.0f} |")
+        lines.append(
+            f"| {r['spacing_mm']:g} | {r['particles']} | {r['steps']} | {r['runout_m']:.4f} | "
+            f"{r['runout_error_pct']:+.1f} % | "
+            f"{r['wall_height_m']:.4f} | {r['profile_rms_mm']:.1f} | {r['failure_rms_mm']:.1f} | "
+            f"{1000 * r['runout_vs_finest']:.1f} | {r['wall_time_s']:.0f} |"
+        )
     verdicts = []
     for res in results:
-        res.checks = checks(res)       # with the study just written
-        verdicts.append(f"- dx = {res.series['spacing'] * 1000:g} mm: " + ("all checks pass" if res.passed else
-                        "FAIL: " + "; ".join(f"{c.metric} {c.value:.4g} > {c.tolerance:.4g}" for c in res.checks if not c.passed)))
-    text = ("# Column collapse (Bui et al. 2008): resolution study\n\n"
-            f"Experiment: runout {surf[-1, 0]:.3f} m, height at wall {surf[0, 1]:.3f} m. Source: {SOURCE}.\n"
-            f"Wall time: stepping only (compile excluded), one process, NUMBA_NUM_THREADS="
-            f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}.\n"
-            "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse --study`\n\n"
-            + "\n".join(lines) + "\n\n"
-            + extrapolation_text(rows, float(surf[-1, 0])) +
-            "'vs finest' columns (CSV) are the discretisation errors the checks add to the 3 mm digitisation "
-            "uncertainty; for the finest run, its difference to the next coarser one. The runout uses "
-            f"{GCI_SAFETY} x its distance to the Richardson limit instead (module docstring).\n\nChecks:\n" + "\n".join(verdicts) + "\n")
+        res.checks = checks(res)  # with the study just written
+        verdicts.append(
+            f"- dx = {res.series['spacing'] * 1000:g} mm: "
+            + (
+                "all checks pass"
+                if res.passed
+                else "FAIL: "
+                + "; ".join(
+                    f"{c.metric} {c.value:.4g} > {c.tolerance:.4g}" for c in res.checks if not c.passed
+                )
+            )
+        )
+    text = (
+        "# Column collapse (Bui et al. 2008): resolution study\n\n"
+        f"Experiment: runout {surf[-1, 0]:.3f} m, height at wall {surf[0, 1]:.3f} m. Source: {SOURCE}.\n"
+        f"Wall time: stepping only (compile excluded), one process, NUMBA_NUM_THREADS="
+        f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}.\n"
+        "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse --study`\n\n"
+        + "\n".join(lines)
+        + "\n\n"
+        + extrapolation_text(rows, float(surf[-1, 0]))
+        + "'vs finest' columns (CSV) are the discretisation errors the checks add to the 3 mm digitisation "
+        "uncertainty; for the finest run, its difference to the next coarser one. The runout uses "
+        f"{GCI_SAFETY} x its distance to the Richardson limit instead (module docstring).\n\nChecks:\n"
+        + "\n".join(verdicts)
+        + "\n"
+    )
     (out / "resolution_study.md").write_text(text)
     print(text)
     return rows

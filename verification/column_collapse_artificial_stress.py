@@ -29,7 +29,7 @@ def principal_tension(ps, n):
     p = ps["mean_stress"][:n]
     s = ps["stress_dev"][:n]
     sxx, syy, szz, sxy = s[:, 0] - p, s[:, 1] - p, s[:, 2] - p, s[:, 3]
-    inplane = 0.5 * (sxx + syy) + np.sqrt((0.5 * (sxx - syy)) ** 2 + sxy ** 2)
+    inplane = 0.5 * (sxx + syy) + np.sqrt((0.5 * (sxx - syy)) ** 2 + sxy**2)
     return np.maximum(inplane, szz)
 
 
@@ -45,9 +45,10 @@ def run_case(resolution, eps, cohesion=None):
     from solver.initial_state import create_particles
     from solver.plan import build_plan
     from solver.simulation import Simulation
+
     dx = cc.spacing(resolution)
     over = {"numerics": {"artificial_stress": float(eps)}}
-    if cohesion is not None:            # a cohesive variant: tension is admissible there, so the remedy can act
+    if cohesion is not None:  # a cohesive variant: tension is admissible there, so the remedy can act
         over["materials"] = {"bars": {"cohesion": float(cohesion)}}
     scene = cc.scene_at(dx, overrides=over)
     start = create_particles(scene, build_plan(scene))
@@ -71,15 +72,32 @@ def run_case(resolution, eps, cohesion=None):
     x = ps["x"][:n][np.argsort(ps["id"][:n])]
     px, py = cc.surface_profile(x, dx)
     fx, fy = cc.failure_line(x0, x, dx, threshold=max(dx, cc.FAILURE_THRESHOLD))
-    series = {"runout": cc.deposit_front(x, dx), "wall_height": float(py[0]), "profile_x": px, "profile_y": py,
-              "failure_x": fx, "failure_y": fy}
+    series = {
+        "runout": cc.deposit_front(x, dx),
+        "wall_height": float(py[0]),
+        "profile_x": px,
+        "profile_y": py,
+        "failure_x": fx,
+        "failure_y": fy,
+    }
     series.update(cc.errors(series, cc.load_reference()))
     p = ps["mean_stress"][:n]
-    return {"eps": eps, "dx": dx, "x0": x0, "x": x, "wall": wall, "steps": sim.step_count, **series,
-            "max_tension_run": max(tension), "max_tension_final": tension[-1],
-            "p_scale": float(np.max(p)),
-            "min_sep_run": min(min_sep), "min_sep_final": min_sep[-1],
-            "close_run": max(close), "close_final": close[-1]}
+    return {
+        "eps": eps,
+        "dx": dx,
+        "x0": x0,
+        "x": x,
+        "wall": wall,
+        "steps": sim.step_count,
+        **series,
+        "max_tension_run": max(tension),
+        "max_tension_final": tension[-1],
+        "p_scale": float(np.max(p)),
+        "min_sep_run": min(min_sep),
+        "min_sep_final": min_sep[-1],
+        "close_run": max(close),
+        "close_final": close[-1],
+    }
 
 
 def main(argv=None):
@@ -92,20 +110,29 @@ def main(argv=None):
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     from solver.errors import BlowUpError
+
     for eps in args.eps:
         try:
             r = run_case(args.resolution, eps, args.cohesion)
-        except BlowUpError as err:            # a result of this study (the remedy off), not a crash of it
-            print(f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: BLOW-UP: {err}", flush=True)
+        except BlowUpError as err:  # a result of this study (the remedy off), not a crash of it
+            print(
+                f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: BLOW-UP: {err}",
+                flush=True,
+            )
             continue
         tag = "" if args.cohesion is None else f"_c{args.cohesion:g}"
         np.savez(out / f"positions_r{args.resolution}_eps{eps:g}{tag}.npz", x0=r["x0"], x=r["x"], dx=r["dx"])
-        print(f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: runout {r['runout']:.4f} m, wall height {r['wall_height']:.4f} m, "
-              f"profile RMS {1000 * r['profile_rms']:.2f} mm, failure RMS {1000 * r['failure_rms']:.2f} mm, "
-              f"max tension over run {r['max_tension_run']:.4g} Pa (final {r['max_tension_final']:.4g} Pa; max p {r['p_scale']:.4g} Pa), "
-              f"min separation/dx run {r['min_sep_run']:.3f} final {r['min_sep_final']:.3f}, "
-              f"fraction with neighbour < dx/2 run {r['close_run']:.4f} final {r['close_final']:.4f}, "
-              f"{r['steps']} steps, {r['wall']:.0f} s", flush=True)
+        print(
+            f"resolution {args.resolution} cohesion {args.cohesion} eps {eps:g}: runout {r['runout']:.4f} m, "
+            f"wall height {r['wall_height']:.4f} m, "
+            f"profile RMS {1000 * r['profile_rms']:.2f} mm, failure RMS {1000 * r['failure_rms']:.2f} mm, "
+            f"max tension over run {r['max_tension_run']:.4g} Pa (final {r['max_tension_final']:.4g} Pa; max "
+            f"p {r['p_scale']:.4g} Pa), "
+            f"min separation/dx run {r['min_sep_run']:.3f} final {r['min_sep_final']:.3f}, "
+            f"fraction with neighbour < dx/2 run {r['close_run']:.4f} final {r['close_final']:.4f}, "
+            f"{r['steps']} steps, {r['wall']:.0f} s",
+            flush=True,
+        )
     return 0
 
 

@@ -21,7 +21,8 @@ lattice row each).
 Input: an npz with x0, x (by particle id) and dx, as written by
 verification/column_collapse_artificial_stress.py (positions_r{R}_eps{eps}.npz).
 
-  python -m verification.column_collapse_failure_line verification/results/column_collapse/positions_r25_eps0.5.npz
+  python -m verification.column_collapse_failure_line
+  verification/results/column_collapse/positions_r25_eps0.5.npz
 """
 
 from __future__ import annotations
@@ -32,9 +33,9 @@ import numpy as np
 
 from . import column_collapse as cc
 
-THRESHOLDS = (0.001, 0.002, 0.003, 0.005, 0.010, 0.020)     # m
-STRAIN_THRESHOLDS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5)       # equivalent shear strain gamma
-H_OVER_DX = 1.3                                              # solver default (defaults.toml numerics.h_over_dx)
+THRESHOLDS = (0.001, 0.002, 0.003, 0.005, 0.010, 0.020)  # m
+STRAIN_THRESHOLDS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5)  # equivalent shear strain gamma
+H_OVER_DX = 1.3  # solver default (defaults.toml numerics.h_over_dx)
 
 
 def boundary(x0, x, dx, threshold, initial=False):
@@ -50,7 +51,15 @@ def table(x0, x, dx, thresholds=THRESHOLDS):
         for initial in (False, True):
             fx, fy = boundary(x0, x, dx, thr, initial)
             err = np.interp(fail[:, 1], fy, fx) - fail[:, 0] if len(fx) > 1 else np.full(len(fail), np.nan)
-            rows.append((thr, "initial" if initial else "final", float(np.sqrt(np.mean(err ** 2))), float(np.mean(err)), err))
+            rows.append(
+                (
+                    thr,
+                    "initial" if initial else "final",
+                    float(np.sqrt(np.mean(err**2))),
+                    float(np.mean(err)),
+                    err,
+                )
+            )
     return rows
 
 
@@ -61,18 +70,18 @@ def pairs(X, radius):
     key = (cell[:, 1] + 1) * nx + cell[:, 0] + 1
     order = np.argsort(key, kind="stable")
     skey = key[order]
-    I, J = [], []
+    rows_i, rows_j = [], []
     for oy in (-1, 0, 1):
         for ox in (-1, 0, 1):
             target = key + oy * nx + ox
             lo, hi = np.searchsorted(skey, target, "left"), np.searchsorted(skey, target, "right")
             cnt = hi - lo
             i = np.repeat(np.arange(len(X)), cnt)
-            first = np.cumsum(cnt) - cnt                            # where each i's block starts in the output
+            first = np.cumsum(cnt) - cnt  # where each i's block starts in the output
             j = order[np.repeat(lo, cnt) + np.arange(cnt.sum()) - np.repeat(first, cnt)]
-            I.append(i)
-            J.append(j)
-    i, j = np.concatenate(I), np.concatenate(J)
+            rows_i.append(i)
+            rows_j.append(j)
+    i, j = np.concatenate(rows_i), np.concatenate(rows_j)
     keep = (i != j) & (np.sum((X[i] - X[j]) ** 2, axis=1) < radius * radius)
     return i[keep], j[keep]
 
@@ -84,8 +93,10 @@ def deformation_gradient(x0, x, dx, h_over_dx=H_OVER_DX):
     dX = x0[j] - x0[i]
     r = np.linalg.norm(dX, axis=1)
     R = r / h
-    dwdr = (-0.5 * np.clip(2.0 - R, 0.0, None) ** 2 + 2.0 * np.clip(1.0 - R, 0.0, None) ** 2) / h   # cubic spline, unnormalised
-    grad = (dwdr / r)[:, None] * (-dX)                           # grad_i W(X_i - X_j)
+    dwdr = (
+        -0.5 * np.clip(2.0 - R, 0.0, None) ** 2 + 2.0 * np.clip(1.0 - R, 0.0, None) ** 2
+    ) / h  # cubic spline, unnormalised
+    grad = (dwdr / r)[:, None] * (-dX)  # grad_i W(X_i - X_j)
     n = len(x0)
     A = np.zeros((n, 2, 2))
     B = np.zeros((n, 2, 2))
@@ -99,7 +110,7 @@ def shear_strain(F):
     E = 0.5 * (np.swapaxes(F, 1, 2) @ F - np.eye(2))
     m = (E[:, 0, 0] + E[:, 1, 1]) / 3.0
     dxx, dyy, dzz, exy = E[:, 0, 0] - m, E[:, 1, 1] - m, -m, 0.5 * (E[:, 0, 1] + E[:, 1, 0])
-    return np.sqrt(2.0 * (dxx ** 2 + dyy ** 2 + dzz ** 2 + 2.0 * exy ** 2))
+    return np.sqrt(2.0 * (dxx**2 + dyy**2 + dzz**2 + 2.0 * exy**2))
 
 
 def strain_boundary(x0, x, dx, gamma, threshold):
@@ -127,7 +138,7 @@ def strain_table(x0, x, dx, thresholds=STRAIN_THRESHOLDS):
     for thr in thresholds:
         fx, fy = strain_boundary(x0, x, dx, gamma, thr)
         err = np.interp(fail[:, 1], fy, fx) - fail[:, 0] if len(fx) > 1 else np.full(len(fail), np.nan)
-        rows.append((thr, float(np.sqrt(np.mean(err ** 2))), float(np.mean(err)), err))
+        rows.append((thr, float(np.sqrt(np.mean(err**2))), float(np.mean(err)), err))
     return rows
 
 
@@ -136,14 +147,28 @@ def main(argv=None):
     d = np.load(argv[0])
     x0, x, dx = d["x0"], d["x"], float(d["dx"])
     fail = cc.load_reference()["failure_line"]
-    print(f"dx = {dx * 1000:g} mm; experimental heights (mm): {np.round(1000 * fail[:, 1]).astype(int).tolist()}")
-    print("| threshold (mm) | position | RMS (mm) | mean (mm) | error per height (mm) |\n|---|---|---|---|---|")
+    print(
+        f"dx = {dx * 1000:g} mm; experimental heights (mm): "
+        f"{np.round(1000 * fail[:, 1]).astype(int).tolist()}"
+    )
+    print(
+        "| threshold (mm) | position | RMS (mm) | mean (mm) | error per height (mm) |\n|---|---|---|---|---|"
+    )
     for thr, pos, rms, mean, err in table(x0, x, dx):
-        print(f"| {thr * 1000:g} | {pos} | {rms * 1000:.1f} | {mean * 1000:+.1f} | {np.round(1000 * err).astype(int).tolist()} |")
-    print("\nStrain-based undisturbed zone (contiguous from the left wall, gamma < threshold; boundary at final x):")
+        print(
+            f"| {thr * 1000:g} | {pos} | {rms * 1000:.1f} | {mean * 1000:+.1f} | "
+            f"{np.round(1000 * err).astype(int).tolist()} |"
+        )
+    print(
+        "\nStrain-based undisturbed zone (contiguous from the left wall, gamma < threshold; boundary at "
+        "final x):"
+    )
     print("| gamma threshold | RMS (mm) | mean (mm) | error per height (mm) |\n|---|---|---|---|")
     for thr, rms, mean, err in strain_table(x0, x, dx):
-        print(f"| {thr:g} | {rms * 1000:.1f} | {mean * 1000:+.1f} | {np.round(1000 * err).astype(int).tolist()} |")
+        print(
+            f"| {thr:g} | {rms * 1000:.1f} | {mean * 1000:+.1f} | "
+            f"{np.round(1000 * err).astype(int).tolist()} |"
+        )
     return 0
 
 

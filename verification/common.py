@@ -25,7 +25,7 @@ class Check:
     metric: str
     value: float
     tolerance: float
-    source: str                 # where the tolerance comes from
+    source: str  # where the tolerance comes from
     passed: bool = field(init=False)
 
     def __post_init__(self):
@@ -43,7 +43,7 @@ class CaseResult:
     particles: int
     steps: int
     wall_time: float
-    series: dict                # observables over time
+    series: dict  # observables over time
     checks: list[Check] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     figure: Path | None = None
@@ -134,7 +134,8 @@ def study_row(path, resolution):
     return rows.get(resolution)
 
 
-GCI_SAFETY = 1.25      # Roache (1998), "Verification and Validation in Computational Science and Engineering": three-grid GCI
+# Roache (1998), "Verification and Validation in Computational Science and Engineering": three-grid GCI
+GCI_SAFETY = 1.25
 
 
 def richardson(spacings, values, orders=(0.5, 4.0)):
@@ -144,14 +145,15 @@ def richardson(spacings, values, orders=(0.5, 4.0)):
     (then the sequence is not in its asymptotic range and no extrapolation is defensible; the
     range 0.5-4 is this project's guard, not from the source). Celik et al. recommend refinement
     ratios above 1.3; callers should say when theirs are smaller."""
-    (h1, f1), (h2, f2), (h3, f3) = sorted(zip(spacings, values), reverse=True)     # coarse to fine
+    (h1, f1), (h2, f2), (h3, f3) = sorted(zip(spacings, values), reverse=True)  # coarse to fine
     d12, d23 = f1 - f2, f2 - f3
     if d12 == 0.0 or d23 == 0.0 or (d12 > 0) != (d23 > 0):
         return None
     target = d12 / d23
 
     def ratio(p):
-        return (h1 ** p - h2 ** p) / (h2 ** p - h3 ** p)
+        return (h1**p - h2**p) / (h2**p - h3**p)
+
     lo, hi = orders
     if not min(ratio(lo), ratio(hi)) <= target <= max(ratio(lo), ratio(hi)):
         return None
@@ -162,7 +164,7 @@ def richardson(spacings, values, orders=(0.5, 4.0)):
         else:
             hi = mid
     p = 0.5 * (lo + hi)
-    f0 = f3 - d23 * h3 ** p / (h2 ** p - h3 ** p)
+    f0 = f3 - d23 * h3**p / (h2**p - h3**p)
     return p, f0
 
 
@@ -175,6 +177,7 @@ def machine_load():
 
 def save_figure(fig, path, dpi=120):
     import matplotlib.pyplot as plt
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
@@ -185,12 +188,15 @@ def save_figure(fig, path, dpi=120):
 def case_main(module, argv=None):
     """`python -m verification.CASE [RESOLUTION] [--study]`."""
     import sys
+
     argv = sys.argv[1:] if argv is None else argv
     if "--study" in argv:
         for row in module.study():
             print(row)
         return 0
-    return report(module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification"))
+    return report(
+        module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification")
+    )
 
 
 def report(res):

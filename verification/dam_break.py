@@ -24,23 +24,37 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import RESULTS, CaseResult, Check, case_main, read_csv, rms, save_figure, save_study, scene_from_file, study_row, timed_samples
+from .common import (
+    RESULTS,
+    CaseResult,
+    Check,
+    case_main,
+    read_csv,
+    rms,
+    save_figure,
+    save_study,
+    scene_from_file,
+    study_row,
+    timed_samples,
+)
 
-A = 0.05715                     # column width a (m), Martin & Moyce's 2.25 in column
+A = 0.05715  # column width a (m), Martin & Moyce's 2.25 in column
 H0 = 2 * A
 G = 9.81
-T_SCALE = np.sqrt(2 * G / A)    # T = t sqrt(2g/a)
-TAU_SCALE = np.sqrt(G / A)      # tau = t sqrt(g/a)
+T_SCALE = np.sqrt(2 * G / A)  # T = t sqrt(2g/a)
+TAU_SCALE = np.sqrt(G / A)  # tau = t sqrt(g/a)
 T_END = 6.0
-DEFAULT_RESOLUTION = 20         # particles across a (CI size: 800 particles)
+DEFAULT_RESOLUTION = 20  # particles across a (CI size: 800 particles)
 STUDY_RESOLUTIONS = (20, 40, 80)
 OPENFOAM = Path(__file__).resolve().parent.parent / "reference_cases" / "openfoam_dam_break_2d" / "data"
 STUDY_FILE = RESULTS / "dam_break_study.csv"
 
 
 def scene(resolution, **overrides):
-    return scene_from_file("dam_break_2d.toml", **{"scene.spacing": A / resolution,
-                                                   "scene.end_time": T_END / T_SCALE, **overrides})
+    return scene_from_file(
+        "dam_break_2d.toml",
+        **{"scene.spacing": A / resolution, "scene.end_time": T_END / T_SCALE, **overrides},
+    )
 
 
 def observe(sim):
@@ -94,8 +108,11 @@ def openfoam_series():
         with open(path) as fh:
             rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
         t = np.array([float(r["t_s"]) for r in rows])
-        out[int(tag)] = (t * T_SCALE, np.array([float(r["front_x_m"]) for r in rows]) / A,
-                         np.array([float(r["wall_height_m"]) for r in rows]) / H0)
+        out[int(tag)] = (
+            t * T_SCALE,
+            np.array([float(r["front_x_m"]) for r in rows]) / A,
+            np.array([float(r["wall_height_m"]) for r in rows]) / H0,
+        )
     return out
 
 
@@ -103,7 +120,11 @@ def discretization_error(resolution):
     """RMS front and height differences between this resolution and the finest of the
     committed resolution study (None if the study has not been run)."""
     r = study_row(STUDY_FILE, resolution)
-    return None if r is None else (float(r["front_vs_finest"]), float(r["height_vs_finest"]), float(r["speed_vs_finest"]))
+    return (
+        None
+        if r is None
+        else (float(r["front_vs_finest"]), float(r["height_vs_finest"]), float(r["speed_vs_finest"]))
+    )
 
 
 def front_speed(T, Z, T_from=1.4, T_to=3.4):
@@ -130,53 +151,105 @@ def checks(res):
     s = res.series
     T, Z, tau, H = s["T"], s["Z"], s["tau"], s["H"]
     dx_a = 1.0 / res.resolution
-    out = [Check("front ahead of Ritter's ideal-fluid front, max(Z - (1 + 2T))", max(0.0, float(np.max(Z - (1 + 2 * T)))),
-                 dx_a, "analytic upper bound; dx/a allowed for locating the front")]
+    out = [
+        Check(
+            "front ahead of Ritter's ideal-fluid front, max(Z - (1 + 2T))",
+            max(0.0, float(np.max(Z - (1 + 2 * T)))),
+            dx_a,
+            "analytic upper bound; dx/a allowed for locating the front",
+        )
+    ]
     scatter = experimental_scatter()
     disc = discretization_error(res.resolution)
     z_disc, h_disc, v_disc = disc if disc else (0.0, 0.0, 0.0)
-    note = (lambda v: f" + discretization error {v:.3g} (resolution study)") if disc else (lambda v: " (no resolution study on file)")
+    note = (
+        (lambda v: f" + discretization error {v:.3g} (resolution study)")
+        if disc
+        else (lambda v: " (no resolution study on file)")
+    )
     Te, Ze = experiment_front()
-    speeds = [front_speed(*experiment_front(n)) for n in
-              ("MM1952_table_a2.25in_transcriptionA", "MM1952_fig3_a2.25in_digitized", "MM1952_fig3_a1.125in_digitized")]
-    out.append(Check("front speed dZ/dT (T 1.4-3.4) vs Martin & Moyce 2.25 in", front_speed(T, Z) - speeds[0],
-                     max(speeds) - min(speeds) + v_disc,
-                     f"spread of the speed among Martin & Moyce's three series {max(speeds) - min(speeds):.3g}" + note(v_disc)))
+    speeds = [
+        front_speed(*experiment_front(n))
+        for n in (
+            "MM1952_table_a2.25in_transcriptionA",
+            "MM1952_fig3_a2.25in_digitized",
+            "MM1952_fig3_a1.125in_digitized",
+        )
+    ]
+    out.append(
+        Check(
+            "front speed dZ/dT (T 1.4-3.4) vs Martin & Moyce 2.25 in",
+            front_speed(T, Z) - speeds[0],
+            max(speeds) - min(speeds) + v_disc,
+            f"spread of the speed among Martin & Moyce's three series {max(speeds) - min(speeds):.3g}"
+            + note(v_disc),
+        )
+    )
     foam = openfoam_series()
-    res.notes = [f"raw RMS front error vs Martin & Moyce (no time-origin correction): {rms(np.interp(Te, T, Z) - Ze):.3g}; "
-                 f"best-fit time offset of this SPH run: dT = {time_offset(T, Z, Te, Ze):.3g}"]
+    res.notes = [
+        "raw RMS front error vs Martin & Moyce (no time-origin correction): "
+        f"{rms(np.interp(Te, T, Z) - Ze):.3g}; "
+        f"best-fit time offset of this SPH run: dT = {time_offset(T, Z, Te, Ze):.3g}"
+    ]
     if foam:
         fine = max(foam)
         Tf, Zf, Hf = foam[fine]
         dT = time_offset(Tf, Zf, Te, Ze)
         res.notes.append(f"time offset of OpenFOAM a/{fine} vs Martin & Moyce: dT = {dT:.3g} (applied below)")
-        out.append(Check(f"front vs Martin & Moyce 2.25 in, origin shifted by OpenFOAM's dT = {dT:.2f}, RMS of Z error",
-                         rms(np.interp(Te - dT, T, Z) - Ze), scatter + z_disc,
-                         f"experimental scatter {scatter:.3g} between column sizes" + note(z_disc)))
+        out.append(
+            Check(
+                f"front vs Martin & Moyce 2.25 in, origin shifted by OpenFOAM's dT = {dT:.2f}, RMS of Z "
+                "error",
+                rms(np.interp(Te - dT, T, Z) - Ze),
+                scatter + z_disc,
+                f"experimental scatter {scatter:.3g} between column sizes" + note(z_disc),
+            )
+        )
         taue, He = experiment_height()
-        dtau = time_offset(Tf / np.sqrt(2.0), Hf, taue[taue <= Tf.max() / np.sqrt(2.0)], He[taue <= Tf.max() / np.sqrt(2.0)])
-        res.notes.append(f"time offset of OpenFOAM a/{fine} height vs Martin & Moyce: dtau = {dtau:.3g} (applied below)")
+        dtau = time_offset(
+            Tf / np.sqrt(2.0), Hf, taue[taue <= Tf.max() / np.sqrt(2.0)], He[taue <= Tf.max() / np.sqrt(2.0)]
+        )
+        res.notes.append(
+            f"time offset of OpenFOAM a/{fine} height vs Martin & Moyce: dtau = {dtau:.3g} (applied below)"
+        )
         keep = (taue - dtau >= 0) & (taue - dtau <= tau.max())
-        out.append(Check(f"wall height vs Martin & Moyce, origin shifted by OpenFOAM's dtau = {dtau:.2f}, RMS of H/H0 error",
-                         rms(np.interp(taue[keep] - dtau, tau, H) - He[keep]), scatter / 2 + h_disc,
-                         "experimental scatter in Z scaled to H (H0 = 2a)" + note(h_disc)))
+        out.append(
+            Check(
+                f"wall height vs Martin & Moyce, origin shifted by OpenFOAM's dtau = {dtau:.2f}, RMS of H/H0 "
+                "error",
+                rms(np.interp(taue[keep] - dtau, tau, H) - He[keep]),
+                scatter / 2 + h_disc,
+                "experimental scatter in Z scaled to H (H0 = 2a)" + note(h_disc),
+            )
+        )
     if len(foam) >= 2:
         coarse = sorted(foam)[-2]
         Tc, Zc, Hc = foam[coarse]
         keep = Tf <= T.max()
         z_unc = rms(np.interp(Tf, Tc, Zc) - Zf)
         h_unc = rms(np.interp(Tf, Tc, Hc) - Hf)
-        out.append(Check(f"front vs OpenFOAM (a/{fine} cells), RMS of Z difference", rms(np.interp(Tf[keep], T, Z) - Zf[keep]),
-                         z_unc + z_disc, f"OpenFOAM mesh uncertainty {z_unc:.3g} (a/{coarse} vs a/{fine})" + note(z_disc)))
-        res.notes.append(f"wall height vs OpenFOAM a/{fine} (volume-equivalent there, surface height here): RMS difference "
-                         f"{rms(np.interp(Tf[keep], T, H) - Hf[keep]):.3g} (OpenFOAM mesh uncertainty {h_unc:.3g})")
+        out.append(
+            Check(
+                f"front vs OpenFOAM (a/{fine} cells), RMS of Z difference",
+                rms(np.interp(Tf[keep], T, Z) - Zf[keep]),
+                z_unc + z_disc,
+                f"OpenFOAM mesh uncertainty {z_unc:.3g} (a/{coarse} vs a/{fine})" + note(z_disc),
+            )
+        )
+        res.notes.append(
+            f"wall height vs OpenFOAM a/{fine} (volume-equivalent there, surface height here): RMS "
+            "difference "
+            f"{rms(np.interp(Tf[keep], T, H) - Hf[keep]):.3g} (OpenFOAM mesh uncertainty {h_unc:.3g})"
+        )
     return out
 
 
 def figure(res, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     s = res.series
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     ax1.plot(s["T"], s["Z"], "b-", lw=2, label=f"ScourSPH a/dx = {res.resolution}")
@@ -187,11 +260,15 @@ def figure(res, path):
     for cells, (Tf, Zf, Hf) in openfoam_series().items():
         ax1.plot(Tf, Zf, "-", lw=1, label=f"OpenFOAM a/{cells}")
         ax2.plot(Tf / np.sqrt(2), Hf, "-", lw=1, label=f"OpenFOAM a/{cells}")
-    ax1.set(xlabel="T = t sqrt(2g/a)", ylabel="Z = front / a", xlim=(0, T_END), ylim=(1, 9), title="surge front")
+    ax1.set(
+        xlabel="T = t sqrt(2g/a)", ylabel="Z = front / a", xlim=(0, T_END), ylim=(1, 9), title="surge front"
+    )
     ax2.plot(s["tau"], s["H"], "b-", lw=2, label="ScourSPH")
     taue, He = experiment_height()
     ax2.plot(taue, He, "o", mfc="none", color="C3", label="Martin & Moyce")
-    ax2.set(xlabel="tau = t sqrt(g/a)", ylabel="H / H0", xlim=(0, T_END / np.sqrt(2)), title="height at the wall")
+    ax2.set(
+        xlabel="tau = t sqrt(g/a)", ylabel="H / H0", xlim=(0, T_END / np.sqrt(2)), title="height at the wall"
+    )
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -209,14 +286,23 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
     for res in results:
         s = res.series
         keep = taue <= s["tau"].max()
-        rows.append(dict(resolution=res.resolution, particles=res.particles, steps=res.steps, wall_time_s=res.wall_time,
-                         front_vs_finest=rms(s["Z"] - finest["Z"]), height_vs_finest=rms(s["H"] - finest["H"]),
-                         speed_vs_finest=abs(front_speed(s["T"], s["Z"]) - front_speed(finest["T"], finest["Z"])),
-                         front_vs_experiment=rms(np.interp(Te, s["T"], s["Z"]) - Ze),
-                         height_vs_experiment=rms(np.interp(taue[keep], s["tau"], s["H"]) - He[keep])))
+        rows.append(
+            dict(
+                resolution=res.resolution,
+                particles=res.particles,
+                steps=res.steps,
+                wall_time_s=res.wall_time,
+                front_vs_finest=rms(s["Z"] - finest["Z"]),
+                height_vs_finest=rms(s["H"] - finest["H"]),
+                speed_vs_finest=abs(front_speed(s["T"], s["Z"]) - front_speed(finest["T"], finest["Z"])),
+                front_vs_experiment=rms(np.interp(Te, s["T"], s["Z"]) - Ze),
+                height_vs_experiment=rms(np.interp(taue[keep], s["tau"], s["H"]) - He[keep]),
+            )
+        )
     return save_study(rows, out_dir, "dam_break_study")
 
 
 if __name__ == "__main__":
     import sys
+
     raise SystemExit(case_main(sys.modules[__name__]))

@@ -24,15 +24,25 @@ from pathlib import Path
 
 import numpy as np
 
+from .common import (
+    RESULTS,
+    CaseResult,
+    Check,
+    case_main,
+    rms,
+    save_figure,
+    save_study,
+    scene_from_file,
+    timed_samples,
+)
 from .probes import probe
-from .common import RESULTS, CaseResult, Check, case_main, rms, save_figure, save_study, scene_from_file, timed_samples
 
 DEPTH = 0.1
 WIDTH = 0.2
 G = 9.81
 RHO0 = 1000.0
-DEFAULT_RESOLUTION = 20          # particles over the depth
-AVERAGING_WINDOW = 0.1           # s, the gauges' response time (~7 acoustic periods 2H/c)
+DEFAULT_RESOLUTION = 20  # particles over the depth
+AVERAGING_WINDOW = 0.1  # s, the gauges' response time (~7 acoustic periods 2H/c)
 STUDY_RESOLUTIONS = (10, 20, 40)
 
 
@@ -56,28 +66,49 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
     sc = scene(resolution, **overrides)
     times = np.linspace(0.0, sc.scene.end_time, 101)
     sim, obs, wall = timed_samples(sc, times, observe)
-    probe_err = np.array([o[0] for o in obs])                 # (time, gauge) error / (rho0 g H)
+    probe_err = np.array([o[0] for o in obs])  # (time, gauge) error / (rho0 g H)
     mach = np.array([o[1] for o in obs])
     e_particle = np.array([o[2] for o in obs])
-    e_p = np.sqrt(np.nanmean(probe_err**2, axis=1))           # instantaneous RMS over gauges
+    e_p = np.sqrt(np.nanmean(probe_err**2, axis=1))  # instantaneous RMS over gauges
     window = times >= sc.scene.end_time - AVERAGING_WINDOW
     e_mean = rms(np.nanmean(probe_err[window], axis=0))
-    res = CaseResult("hydrostatic", resolution, sim.particles.n_owned, sim.step_count, wall,
-                     {"t": times, "pressure_error": e_p, "mach": mach, "particle_pressure_noise": e_particle})
+    res = CaseResult(
+        "hydrostatic",
+        resolution,
+        sim.particles.n_owned,
+        sim.step_count,
+        wall,
+        {"t": times, "pressure_error": e_p, "mach": mach, "particle_pressure_noise": e_particle},
+    )
     h_over_depth = sc.h / DEPTH
     res.checks = [
-        Check("RMS error of time-averaged gauge pressure / (rho0 g H)", e_mean, h_over_depth,
-              "error analysis: support truncation at surface and wall, bound h/H"),
-        Check("max spurious speed / c at the end", mach[-1], 0.01,
-              "error analysis: Mach 0.01, an order below the seed's design Mach 0.1"),
-        Check("particles reflected at walls (safeguard acted)", float(sim.wall_reflections), 0.0,
-              "still water must never reach a wall plane"),
+        Check(
+            "RMS error of time-averaged gauge pressure / (rho0 g H)",
+            e_mean,
+            h_over_depth,
+            "error analysis: support truncation at surface and wall, bound h/H",
+        ),
+        Check(
+            "max spurious speed / c at the end",
+            mach[-1],
+            0.01,
+            "error analysis: Mach 0.01, an order below the seed's design Mach 0.1",
+        ),
+        Check(
+            "particles reflected at walls (safeguard acted)",
+            float(sim.wall_reflections),
+            0.0,
+            "still water must never reach a wall plane",
+        ),
     ]
     res.series["mean_pressure_error"] = e_mean
     res.sim_reflections = sim.wall_reflections
-    res.notes = [f"instantaneous gauge pressure error at the end {e_p[-1]:.3g} (max over the run {e_p.max():.3g}); "
-                 f"max Mach over the run {mach.max():.3g}",
-                 f"per-particle pressure noise at the end (RMS / rho0 g H): {e_particle[-1]:.3g} (acoustic, see docstring)"]
+    res.notes = [
+        f"instantaneous gauge pressure error at the end {e_p[-1]:.3g} (max over the run {e_p.max():.3g}); "
+        f"max Mach over the run {mach.max():.3g}",
+        f"per-particle pressure noise at the end (RMS / rho0 g H): {e_particle[-1]:.3g} (acoustic, see "
+        "docstring)",
+    ]
     if out_dir is not None:
         res.figure = figure(res, sim, Path(out_dir) / f"hydrostatic_r{resolution}.png")
     return res
@@ -85,8 +116,10 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
 
 def figure(res, sim, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     ps = sim.particles
     y, p = ps.owned("x")[:, 1], ps.owned("p")
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -95,7 +128,9 @@ def figure(res, sim, path):
     ax1.plot(RHO0 * G * (DEPTH - yy), yy, "k-", label="rho0 g (H - y)")
     ax1.set(xlabel="p (Pa)", ylabel="y (m)", title=f"pressure at t = {sim.t:.2f} s, H/dx = {res.resolution}")
     ax2.semilogy(res.series["t"], np.maximum(res.series["mach"], 1e-12), label="max |v| / c")
-    ax2.semilogy(res.series["t"], np.maximum(res.series["pressure_error"], 1e-12), label="RMS p error / (rho0 g H)")
+    ax2.semilogy(
+        res.series["t"], np.maximum(res.series["pressure_error"], 1e-12), label="RMS p error / (rho0 g H)"
+    )
     ax2.axhline(0.01, color="k", ls="--", lw=1, label="Mach tolerance")
     ax2.set(xlabel="t (s)", title="errors over time")
     for ax in (ax1, ax2):
@@ -118,16 +153,32 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
         (fine, STRONGER_AV, "alpha 0.1"),
         (fine, {"numerics.leapfrog": "symplectic_density"}, "symplectic_density"),
         (fine, {"numerics.image_pressure": "hydrostatic"}, "hydrostatic image pressure"),
-        (fine, {"numerics.leapfrog": "symplectic_density", "numerics.image_pressure": "hydrostatic"}, "both options")]
+        (
+            fine,
+            {"numerics.leapfrog": "symplectic_density", "numerics.image_pressure": "hydrostatic"},
+            "both options",
+        ),
+    ]
     for r, overrides, label in variants:
         res = run(r, **overrides)
-        rows.append(dict(resolution=r, options=label, wall_reflections=res.sim_reflections, particles=res.particles, steps=res.steps, wall_time_s=res.wall_time,
-                         mean_pressure_error=float(res.series["mean_pressure_error"]),
-                         instantaneous_pressure_error=float(res.series["pressure_error"][-1]), mach=float(res.series["mach"][-1]),
-                         particle_pressure_noise=float(res.series["particle_pressure_noise"][-1])))
+        rows.append(
+            dict(
+                resolution=r,
+                options=label,
+                wall_reflections=res.sim_reflections,
+                particles=res.particles,
+                steps=res.steps,
+                wall_time_s=res.wall_time,
+                mean_pressure_error=float(res.series["mean_pressure_error"]),
+                instantaneous_pressure_error=float(res.series["pressure_error"][-1]),
+                mach=float(res.series["mach"][-1]),
+                particle_pressure_noise=float(res.series["particle_pressure_noise"][-1]),
+            )
+        )
     return save_study(rows, out_dir, "hydrostatic_study")
 
 
 if __name__ == "__main__":
     import sys
+
     raise SystemExit(case_main(sys.modules[__name__]))

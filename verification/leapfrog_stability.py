@@ -37,7 +37,13 @@ if __name__ == "__main__":
     print("| scheme | " + " | ".join(f"omega dt = {w}" for w in ws) + " |")
     print("|---|" + "---|" * len(ws))
     for alpha in (0.0, 0.01, 0.1):
-        print(f"| seed (rho, v at half steps, predicted), alpha = {alpha} | "
-              + " | ".join(f"{spectral_radius(amplification(w, alpha)):.5f}" for w in ws) + " |")
-    print("| rho at whole steps (symplectic), alpha = 0 | "
-          + " | ".join(f"{spectral_radius(staggered_amplification(w)):.5f}" for w in ws) + " |")
+        print(
+            f"| seed (rho, v at half steps, predicted), alpha = {alpha} | "
+            + " | ".join(f"{spectral_radius(amplification(w, alpha)):.5f}" for w in ws)
+            + " |"
+        )
+    print(
+        "| rho at whole steps (symplectic), alpha = 0 | "
+        + " | ".join(f"{spectral_radius(staggered_amplification(w)):.5f}" for w in ws)
+        + " |"
+    )

@@ -49,12 +49,19 @@ def run_cases(which, out_dir, resolution=None, study=False, quiet=False):
             rows = mod.study()
             print(f"{name}: resolution study (error and wall time side by side)")
             for row in rows:
-                print("  " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items()))
+                print(
+                    "  "
+                    + ", ".join(
+                        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in row.items()
+                    )
+                )
             continue
         res = mod.run(resolution or mod.DEFAULT_RESOLUTION, out_dir=out_dir)
         verdict = "PASS" if res.passed else "FAIL"
-        print(f"{name} [{verdict}]: resolution {res.resolution}, {res.particles} particles, {res.steps} steps, "
-              f"{res.wall_time:.1f} s wall")
+        print(
+            f"{name} [{verdict}]: resolution {res.resolution}, {res.particles} particles, {res.steps} steps, "
+            f"{res.wall_time:.1f} s wall"
+        )
         for check in res.checks:
             print(check.line())
         for note in res.notes:

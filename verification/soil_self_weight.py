@@ -48,15 +48,17 @@ import numpy as np
 from .column_collapse import scene_at
 from .common import RESULTS, CaseResult, Check, machine_load, rms, study_row
 
-H = 0.2                     # column height (m)
-WIDTH = 0.12                # column width between the free-slip walls (m)
-PHI_ELASTIC = 60.0          # deg: stays elastic in uniaxial strain (see module docstring)
-T_COLUMN = 0.6              # s: ~15 first-mode periods 4 H / c_p = 0.039 s
-T_RAMP = 0.3                # s: gravity ramp (see module docstring)
-HEAP = [[0.0, 0.0], [0.3, 0.0], [0.0, 0.3 * np.tan(np.radians(15.0))]]   # 15 deg < phi = 19.8 deg
+H = 0.2  # column height (m)
+WIDTH = 0.12  # column width between the free-slip walls (m)
+PHI_ELASTIC = 60.0  # deg: stays elastic in uniaxial strain (see module docstring)
+T_COLUMN = 0.6  # s: ~15 first-mode periods 4 H / c_p = 0.039 s
+T_RAMP = 0.3  # s: gravity ramp (see module docstring)
+HEAP = [[0.0, 0.0], [0.3, 0.0], [0.0, 0.3 * np.tan(np.radians(15.0))]]  # 15 deg < phi = 19.8 deg
 T_HEAP = 2.0
 T_SETTLE = 0.5
-DEFAULT_RESOLUTION = 40     # dx = 5 mm (~40 s): the finest of the study; coarser heaps creep more (see the study)
+DEFAULT_RESOLUTION = (
+    40  # dx = 5 mm (~40 s): the finest of the study; coarser heaps creep more (see the study)
+)
 STUDY_RESOLUTIONS = (10, 20, 40)
 OUT = RESULTS / "soil_self_weight"
 STUDY_FILE = OUT / "resolution_study.csv"
@@ -65,24 +67,45 @@ G = 9.81
 
 def column_scene(resolution):
     dx = H / resolution
-    return scene_at(dx, T_COLUMN, overrides={
-        "domain": {"min": [0.0, 0.0], "max": [WIDTH, 1.5 * H]},
-        "walls": {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"},
-        "materials": {"bars": {"friction_angle": PHI_ELASTIC}},
-        "blocks": [{"name": "column", "material": "bars", "shape": "rectangle", "min": [0.0, 0.0], "max": [WIDTH, H]}]})
+    return scene_at(
+        dx,
+        T_COLUMN,
+        overrides={
+            "domain": {"min": [0.0, 0.0], "max": [WIDTH, 1.5 * H]},
+            "walls": {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"},
+            "materials": {"bars": {"friction_angle": PHI_ELASTIC}},
+            "blocks": [
+                {
+                    "name": "column",
+                    "material": "bars",
+                    "shape": "rectangle",
+                    "min": [0.0, 0.0],
+                    "max": [WIDTH, H],
+                }
+            ],
+        },
+    )
 
 
 def heap_scene(resolution):
     dx = H / resolution
-    return scene_at(dx, T_HEAP, overrides={
-        "domain": {"max": [0.4, 0.15]},
-        "blocks": [{"name": "heap", "material": "bars", "shape": "polygon", "vertices": HEAP, "geostatic": True}]})
+    return scene_at(
+        dx,
+        T_HEAP,
+        overrides={
+            "domain": {"max": [0.4, 0.15]},
+            "blocks": [
+                {"name": "heap", "material": "bars", "shape": "polygon", "vertices": HEAP, "geostatic": True}
+            ],
+        },
+    )
 
 
 def moment_error(h_over_dx=None):
     """delta = sum_j V_j (y_j - y_i) dW_ij/dy_j - 1 on a square lattice (2D cubic spline):
     the relative error of the SPH gradient of a linear field at an interior particle."""
     from solver.kernels import cubic_spline_dwdr, cubic_spline_normalisation
+
     if h_over_dx is None:
         h_over_dx = column_scene(DEFAULT_RESOLUTION).h / (H / DEFAULT_RESOLUTION)
     h, norm, total = h_over_dx, cubic_spline_normalisation(2, h_over_dx), 0.0
@@ -105,8 +128,10 @@ def _by_id(ps, name):
 
 
 def run_column(resolution):
-    from solver.simulation import Simulation
     import time
+
+    from solver.simulation import Simulation
+
     scene = column_scene(resolution)
     mat = scene.materials["bars"]
     M, rho0 = constrained_modulus(mat), mat.density
@@ -129,12 +154,12 @@ def run_column(resolution):
         sim.advance_to(t, on_step=ramp)
         sim.current_state()
         x = _by_id(ps, "x")
-        u = x0[:, 1] - x[:, 1]                                   # downward displacement
+        u = x0[:, 1] - x[:, 1]  # downward displacement
         s_dev, p = _by_id(ps, "stress_dev"), _by_id(ps, "mean_stress")
         settle.append(u[top].mean())
         if t >= T_COLUMN * 2 / 3:
             samples_u.append(u.copy())
-            samples_s.append(p - s_dev[:, 1])                    # -sigma_yy, compression positive
+            samples_s.append(p - s_dev[:, 1])  # -sigma_yy, compression positive
         n = ps.n_owned
         ke.append(0.5 * float(np.sum(ps["mass"][:n] * np.sum(ps["v_half"][:n] ** 2, axis=1))))
     wall = time.perf_counter() - start
@@ -144,75 +169,115 @@ def run_column(resolution):
     s_exact = rho0 * G * (H - z)
     settlement = float(u_mean[top].mean())
     last = np.array(settle)[times >= T_COLUMN * 2 / 3]
-    out = dict(settlement=settlement, settlement_exact=rho0 * G * H * H / (2 * M),
-               settlement_oscillation=float(0.5 * (last.max() - last.min())),
-               u_rms_rel=rms(u_mean - u_exact) / (rho0 * G * H * H / (2 * M)),
-               sigma_rms_rel=rms(s_mean - s_exact) / (rho0 * G * H),
-               sigma_osc_rel=float(np.max(np.std(samples_s, axis=0))) / (rho0 * G * H),
-               max_yield_excess=float(_yield_excess(sim).max()),
-               z=z, u=u_mean, u_exact=u_exact, sigma=s_mean, sigma_exact=s_exact,
-               t=times, top_settlement=np.array(settle), ke=np.array(ke))
+    out = dict(
+        settlement=settlement,
+        settlement_exact=rho0 * G * H * H / (2 * M),
+        settlement_oscillation=float(0.5 * (last.max() - last.min())),
+        u_rms_rel=rms(u_mean - u_exact) / (rho0 * G * H * H / (2 * M)),
+        sigma_rms_rel=rms(s_mean - s_exact) / (rho0 * G * H),
+        sigma_osc_rel=float(np.max(np.std(samples_s, axis=0))) / (rho0 * G * H),
+        max_yield_excess=float(_yield_excess(sim).max()),
+        z=z,
+        u=u_mean,
+        u_exact=u_exact,
+        sigma=s_mean,
+        sigma_exact=s_exact,
+        t=times,
+        top_settlement=np.array(settle),
+        ke=np.array(ke),
+    )
     return sim, out, wall
 
 
 def _yield_excess(sim):
     from solver.physics.soil import yield_excess
+
     ps = sim.particles
     rows = sim.lists[("soil", "soil")].targets
     return yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil)
 
 
 def run_heap(resolution):
-    from solver.simulation import Simulation
     import time
+
+    from solver.simulation import Simulation
+
     scene = heap_scene(resolution)
     mat = scene.materials["bars"]
     height = HEAP[2][1]
-    elastic_scale = mat.density * G * height ** 2 / (2 * constrained_modulus(mat))
+    elastic_scale = mat.density * G * height**2 / (2 * constrained_modulus(mat))
     sim = Simulation(scene)
     ps = sim.particles
     x0 = _by_id(ps, "x").copy()
     times = np.linspace(0.0, T_HEAP, 41)[1:]
     ke, x_settled = [], None
     slope = HEAP[2][1] / HEAP[1][0]
-    body = (HEAP[1][0] - x0[:, 0]) * slope >= 2.0 * scene.h       # heap at least one kernel support thick
+    body = (HEAP[1][0] - x0[:, 0]) * slope >= 2.0 * scene.h  # heap at least one kernel support thick
     start = time.perf_counter()
     for t in times:
         sim.advance_to(t)
         if x_settled is None and t >= T_SETTLE - 1e-12:
             x_settled = _by_id(ps, "x").copy()
-        ke.append(0.5 * float(np.sum(_by_id(ps, "mass")[body] * np.sum(_by_id(ps, "v_half")[body] ** 2, axis=1))))
+        ke.append(
+            0.5 * float(np.sum(_by_id(ps, "mass")[body] * np.sum(_by_id(ps, "v_half")[body] ** 2, axis=1)))
+        )
     wall = time.perf_counter() - start
     x = _by_id(ps, "x")
     ke = np.array(ke)
     creep = np.linalg.norm(x - x_settled, axis=1)
     total = np.linalg.norm(x - x0, axis=1)
     sim.current_state()
-    return sim, dict(creep_max=float(creep[body].max()), toe_creep_max=float(creep[~body].max(initial=0.0)),
-                     elastic_scale=elastic_scale, total_max=float(total.max()),
-                     total_rms=rms(total), ke_final_over_peak=float(ke[-1] / ke.max()), ke=ke, t=times,
-                     x0=x0, x=x, max_yield_excess=float(_yield_excess(sim).max())), wall
+    return (
+        sim,
+        dict(
+            creep_max=float(creep[body].max()),
+            toe_creep_max=float(creep[~body].max(initial=0.0)),
+            elastic_scale=elastic_scale,
+            total_max=float(total.max()),
+            total_rms=rms(total),
+            ke_final_over_peak=float(ke[-1] / ke.max()),
+            ke=ke,
+            t=times,
+            x0=x0,
+            x=x,
+            max_yield_excess=float(_yield_excess(sim).max()),
+        ),
+        wall,
+    )
 
 
 def discretization_error(resolution):
     r = study_row(STUDY_FILE, resolution)
     if r is None:
         return None
-    return {k: float(r[k]) for k in ("settlement_vs_finest", "u_profile_vs_finest", "sigma_vs_finest", "creep_vs_finest")}
+    return {
+        k: float(r[k])
+        for k in ("settlement_vs_finest", "u_profile_vs_finest", "sigma_vs_finest", "creep_vs_finest")
+    }
 
 
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
     sim_c, col, wall_c = run_column(resolution)
     sim_h, heap, wall_h = run_heap(resolution)
     series = {"column": col, "heap": heap}
-    res = CaseResult("soil_self_weight", resolution, sim_c.particles.n_owned + sim_h.particles.n_owned,
-                     sim_c.step_count + sim_h.step_count, wall_c + wall_h, series)
+    res = CaseResult(
+        "soil_self_weight",
+        resolution,
+        sim_c.particles.n_owned + sim_h.particles.n_owned,
+        sim_c.step_count + sim_h.step_count,
+        wall_c + wall_h,
+        series,
+    )
     res.checks = checks(res)
-    res.notes = [f"column: settlement {col['settlement'] * 1e3:.4f} mm vs rho g H^2/(2M) = {col['settlement_exact'] * 1e3:.4f} mm "
-                 f"(remaining oscillation +/- {col['settlement_oscillation'] * 1e3:.4f} mm)",
-                 f"heap: largest displacement over the whole run {heap['total_max'] * 1e3:.2f} mm (RMS {heap['total_rms'] * 1e3:.3f} mm), "
-                 f"after {T_SETTLE} s {heap['creep_max'] * 1e3:.3f} mm where it is >= 2h thick, "
-                 f"{heap['toe_creep_max'] * 1e3:.3f} mm at the toe (thinner than 2h)"]
+    res.notes = [
+        f"column: settlement {col['settlement'] * 1e3:.4f} mm vs rho g H^2/(2M) = "
+        f"{col['settlement_exact'] * 1e3:.4f} mm "
+        f"(remaining oscillation +/- {col['settlement_oscillation'] * 1e3:.4f} mm)",
+        f"heap: largest displacement over the whole run {heap['total_max'] * 1e3:.2f} mm (RMS "
+        f"{heap['total_rms'] * 1e3:.3f} mm), "
+        f"after {T_SETTLE} s {heap['creep_max'] * 1e3:.3f} mm where it is >= 2h thick, "
+        f"{heap['toe_creep_max'] * 1e3:.3f} mm at the toe (thinner than 2h)",
+    ]
     if out_dir is not None:
         res.figure = figure(res, Path(out_dir) / f"soil_self_weight_r{resolution}.png")
     return res
@@ -221,34 +286,67 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
 def checks(res):
     col, heap = res.series["column"], res.series["heap"]
     disc = discretization_error(res.resolution)
-    d = disc or {"settlement_vs_finest": 0.0, "u_profile_vs_finest": 0.0, "sigma_vs_finest": 0.0, "creep_vs_finest": 0.0}
-    tag = " + discretisation error (resolution study)" if disc else " (no resolution study on file: no discretisation allowance)"
+    d = disc or {
+        "settlement_vs_finest": 0.0,
+        "u_profile_vs_finest": 0.0,
+        "sigma_vs_finest": 0.0,
+        "creep_vs_finest": 0.0,
+    }
+    tag = (
+        " + discretisation error (resolution study)"
+        if disc
+        else " (no resolution study on file: no discretisation allowance)"
+    )
     exact = col["settlement_exact"]
     delta = abs(moment_error())
     mom = f" + kernel moment error (2 delta = {200 * delta:.2f} %, computed)"
     return [
-        Check("column settlement / (rho g H^2 / 2M) - 1", col["settlement"] / exact - 1.0,
-              (col["settlement_oscillation"] + d["settlement_vs_finest"]) / exact + 2 * delta,
-              "analytic 1D; remaining first-mode oscillation (measured)" + mom + tag),
-        Check("column displacement profile, RMS(u - u_exact) / u_exact(H)", col["u_rms_rel"],
-              col["settlement_oscillation"] / exact + d["u_profile_vs_finest"] + 2 * delta,
-              "analytic 1D; remaining oscillation" + mom + tag),
-        Check("column vertical stress, RMS(sigma_v - rho g (H - z)) / (rho g H)", col["sigma_rms_rel"],
-              col["sigma_osc_rel"] + d["sigma_vs_finest"] + delta,
-              "equilibrium; remaining oscillation (largest std over the window) + kernel moment error delta" + tag),
-        Check("column stays elastic (max yield excess)", max(col["max_yield_excess"], 0.0), 1e-9,
-              "phi = 60 deg: uniaxial strain is far inside the yield surface"),
-        Check("heap: largest displacement after the elastic adjustment, where >= 2h thick (m)", heap["creep_max"],
-              heap["elastic_scale"] + d["creep_vs_finest"], "elastic scale rho g H^2 / (2M) of the heap" + tag),
-        Check("heap kinetic energy final / peak, where >= 2h thick", heap["ke_final_over_peak"], 1e-2,
-              "at rest: residual KE below 1 % of the peak (definition)"),
+        Check(
+            "column settlement / (rho g H^2 / 2M) - 1",
+            col["settlement"] / exact - 1.0,
+            (col["settlement_oscillation"] + d["settlement_vs_finest"]) / exact + 2 * delta,
+            "analytic 1D; remaining first-mode oscillation (measured)" + mom + tag,
+        ),
+        Check(
+            "column displacement profile, RMS(u - u_exact) / u_exact(H)",
+            col["u_rms_rel"],
+            col["settlement_oscillation"] / exact + d["u_profile_vs_finest"] + 2 * delta,
+            "analytic 1D; remaining oscillation" + mom + tag,
+        ),
+        Check(
+            "column vertical stress, RMS(sigma_v - rho g (H - z)) / (rho g H)",
+            col["sigma_rms_rel"],
+            col["sigma_osc_rel"] + d["sigma_vs_finest"] + delta,
+            "equilibrium; remaining oscillation (largest std over the window) + kernel moment error delta"
+            + tag,
+        ),
+        Check(
+            "column stays elastic (max yield excess)",
+            max(col["max_yield_excess"], 0.0),
+            1e-9,
+            "phi = 60 deg: uniaxial strain is far inside the yield surface",
+        ),
+        Check(
+            "heap: largest displacement after the elastic adjustment, where >= 2h thick (m)",
+            heap["creep_max"],
+            heap["elastic_scale"] + d["creep_vs_finest"],
+            "elastic scale rho g H^2 / (2M) of the heap" + tag,
+        ),
+        Check(
+            "heap kinetic energy final / peak, where >= 2h thick",
+            heap["ke_final_over_peak"],
+            1e-2,
+            "at rest: residual KE below 1 % of the peak (definition)",
+        ),
     ]
 
 
 def figure(res, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     col, heap = res.series["column"], res.series["heap"]
     fig, axs = plt.subplots(1, 3, figsize=(12, 3.6))
     o = np.argsort(col["z"])
@@ -285,16 +383,26 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
         oz = np.argsort(rc["z"])
         u_ref = np.interp(col["z"], rc["z"][oz], rc["u"][oz])
         s_ref = np.interp(col["z"], rc["z"][oz], rc["sigma"][oz])
-        rows.append({"resolution": res.resolution, "spacing_mm": 1000 * H / res.resolution, "particles": res.particles,
-                     "steps": res.steps, "wall_time_s": res.wall_time,
-                     "settlement_mm": 1000 * col["settlement"], "settlement_exact_mm": 1000 * col["settlement_exact"],
-                     "settlement_error_pct": 100 * (col["settlement"] / col["settlement_exact"] - 1),
-                     "u_rms_rel": col["u_rms_rel"], "sigma_rms_rel": col["sigma_rms_rel"],
-                     "heap_creep_mm": 1000 * s["heap"]["creep_max"], "heap_total_max_mm": 1000 * s["heap"]["total_max"],
-                     "settlement_vs_finest": abs(col["settlement"] - rc["settlement"]),
-                     "u_profile_vs_finest": rms(col["u"] - u_ref) / col["settlement_exact"],
-                     "sigma_vs_finest": rms(col["sigma"] - s_ref) / (2650 * G * H),
-                     "creep_vs_finest": abs(s["heap"]["creep_max"] - ref["heap"]["creep_max"])})
+        rows.append(
+            {
+                "resolution": res.resolution,
+                "spacing_mm": 1000 * H / res.resolution,
+                "particles": res.particles,
+                "steps": res.steps,
+                "wall_time_s": res.wall_time,
+                "settlement_mm": 1000 * col["settlement"],
+                "settlement_exact_mm": 1000 * col["settlement_exact"],
+                "settlement_error_pct": 100 * (col["settlement"] / col["settlement_exact"] - 1),
+                "u_rms_rel": col["u_rms_rel"],
+                "sigma_rms_rel": col["sigma_rms_rel"],
+                "heap_creep_mm": 1000 * s["heap"]["creep_max"],
+                "heap_total_max_mm": 1000 * s["heap"]["total_max"],
+                "settlement_vs_finest": abs(col["settlement"] - rc["settlement"]),
+                "u_profile_vs_finest": rms(col["u"] - u_ref) / col["settlement_exact"],
+                "sigma_vs_finest": rms(col["sigma"] - s_ref) / (2650 * G * H),
+                "creep_vs_finest": abs(s["heap"]["creep_max"] - ref["heap"]["creep_max"]),
+            }
+        )
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "resolution_study.csv", "w", newline="") as fh:
@@ -303,17 +411,29 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
         w.writerows(rows)
     for res in results:
         res.checks = checks(res)
-    lines = ["| dx (mm) | particles | steps | settlement (mm) | exact (mm) | error | u RMS / u(H) | sigma_v RMS / rho g H | "
-             "heap creep after 0.5 s (mm) | heap max displacement (mm) | wall time (s) | checks |", "|" + "---|" * 12]
+    lines = [
+        "| dx (mm) | particles | steps | settlement (mm) | exact (mm) | error | u RMS / u(H) | sigma_v RMS / "
+        "rho g H | "
+        "heap creep after 0.5 s (mm) | heap max displacement (mm) | wall time (s) | checks |",
+        "|" + "---|" * 12,
+    ]
     for r, res in zip(rows, results):
-        lines.append(f"| {r['spacing_mm']:g} | {r['particles']} | {r['steps']} | {r['settlement_mm']:.4f} | {r['settlement_exact_mm']:.4f} | "
-                     f"{r['settlement_error_pct']:+.2f} % | {r['u_rms_rel']:.3f} | {r['sigma_rms_rel']:.4f} | {r['heap_creep_mm']:.3f} | "
-                     f"{r['heap_total_max_mm']:.2f} | {r['wall_time_s']:.0f} | "
-                     + ("pass" if res.passed else "FAIL: " + "; ".join(c.metric for c in res.checks if not c.passed)) + " |")
-    text = ("# Soil self-weight: confined column (1D analytic) and a 15 deg heap: resolution study\n\n"
-            f"Wall time: stepping, one process, NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
-            f"{machine_load()}.\nReproduce: `NUMBA_NUM_THREADS=1 python -m verification.soil_self_weight --study`\n\n"
-            + "\n".join(lines) + "\n")
+        lines.append(
+            f"| {r['spacing_mm']:g} | {r['particles']} | {r['steps']} | {r['settlement_mm']:.4f} | "
+            f"{r['settlement_exact_mm']:.4f} | "
+            f"{r['settlement_error_pct']:+.2f} % | {r['u_rms_rel']:.3f} | {r['sigma_rms_rel']:.4f} | "
+            f"{r['heap_creep_mm']:.3f} | "
+            f"{r['heap_total_max_mm']:.2f} | {r['wall_time_s']:.0f} | "
+            + ("pass" if res.passed else "FAIL: " + "; ".join(c.metric for c in res.checks if not c.passed))
+            + " |"
+        )
+    text = (
+        "# Soil self-weight: confined column (1D analytic) and a 15 deg heap: resolution study\n\n"
+        "Wall time: stepping, one process, "
+        f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
+        f"{machine_load()}.\nReproduce: `NUMBA_NUM_THREADS=1 python -m verification.soil_self_weight "
+        "--study`\n\n" + "\n".join(lines) + "\n"
+    )
     (out / "resolution_study.md").write_text(text)
     print(text)
     return rows
@@ -321,6 +441,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
 
 if __name__ == "__main__":
     import sys
+
     if "--study" in sys.argv:
         study()
     else:

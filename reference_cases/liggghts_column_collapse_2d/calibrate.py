@@ -14,6 +14,7 @@ sensitivity to that choice.
    runout_m, wall_height_m (final deposit), and the calibration record in the
    manifest.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -21,9 +22,6 @@ import csv
 import json
 import os
 import sys
-from pathlib import Path
-
-import numpy as np
 
 from reference_cases import _common as C
 from reference_cases.liggghts_column_collapse_2d import run as R
@@ -48,8 +46,13 @@ def choose_rolling(angles: dict[float, float], target: float = TARGET_DEG) -> fl
     return min(mus, key=lambda m: abs(angles[m] - target))
 
 
-def calibrate(tiny: bool = False, collapses: bool = True, grid=ROLLING_GRID,
-              sliding: float = SLIDING, reuse_heaps: bool = False) -> dict:
+def calibrate(
+    tiny: bool = False,
+    collapses: bool = True,
+    grid=ROLLING_GRID,
+    sliding: float = SLIDING,
+    reuse_heaps: bool = False,
+) -> dict:
     mk = R.tiny_params if tiny else R.Params
     heaps = {}
     records = []
@@ -57,8 +60,11 @@ def calibrate(tiny: bool = False, collapses: bool = True, grid=ROLLING_GRID,
         res = R.run_repose(mk(sliding=sliding, rolling=mur), tiny=tiny, reuse=reuse_heaps)
         heaps[mur] = res["angle"]
         records.append(res["entry"])
-        print(f"heap mu_s={sliding} mu_r={mur}: {res['angle']:.2f} deg "
-              f"({res['entry']['n_grains']} grains, {res['entry']['wall_time_s']} s)", flush=True)
+        print(
+            f"heap mu_s={sliding} mu_r={mur}: {res['angle']:.2f} deg "
+            f"({res['entry']['n_grains']} grains, {res['entry']['wall_time_s']} s)",
+            flush=True,
+        )
     # refine: pour a heap at the interpolated mu_r, interpolate again with it, until
     # the angle is within TOL_DEG of the target or mu_r repeats (0.005 resolution)
     for _ in range(MAX_REFINE):
@@ -68,8 +74,7 @@ def calibrate(tiny: bool = False, collapses: bool = True, grid=ROLLING_GRID,
         res = R.run_repose(mk(sliding=sliding, rolling=chosen), tiny=tiny, reuse=reuse_heaps)
         heaps[chosen] = res["angle"]
         records.append(res["entry"])
-        print(f"heap mu_s={sliding} mu_r={chosen} (refinement): {res['angle']:.2f} deg",
-              flush=True)
+        print(f"heap mu_s={sliding} mu_r={chosen} (refinement): {res['angle']:.2f} deg", flush=True)
         if abs(res["angle"] - TARGET_DEG) < TOL_DEG:
             break
     chosen = min(heaps, key=lambda m: abs(heaps[m] - TARGET_DEG))
@@ -77,17 +82,22 @@ def calibrate(tiny: bool = False, collapses: bool = True, grid=ROLLING_GRID,
         "target_friction_angle_deg": TARGET_DEG,
         "target_source": "Bui et al. (2008), aluminium bars, friction angle 19.8 deg",
         "method": "angle of repose of a heap poured (1800 grains at 1500 grains/s, 0.3 m/s, "
-                  "from 75-95 mm height) against the left wall of the same periodic slab (same "
-                  "contact law), settled 0.5 s; slope fitted to the volume-equivalent height "
-                  "(heap's own solid fraction, measured in its core) where 0.2 h_max < h < "
-                  "0.8 h_max and x >= 30 mm (outside the pour zone); mu_s fixed, mu_r from "
-                  "linear interpolation of the measured angle in the bracketing interval, rounded to "
-                  "0.01, refined with further heaps until within 1 deg; chosen = the measured "
-                  "mu_r whose angle is nearest the target",
-        "heaps": [{"sliding_friction": sliding, "rolling_friction": m,
-                   "repose_angle_deg": round(heaps[m], 2)} for m in sorted(heaps)],
-        "chosen": {"sliding_friction": sliding, "rolling_friction": chosen,
-                   "repose_angle_deg": round(heaps[chosen], 2)},
+        "from 75-95 mm height) against the left wall of the same periodic slab (same "
+        "contact law), settled 0.5 s; slope fitted to the volume-equivalent height "
+        "(heap's own solid fraction, measured in its core) where 0.2 h_max < h < "
+        "0.8 h_max and x >= 30 mm (outside the pour zone); mu_s fixed, mu_r from "
+        "linear interpolation of the measured angle in the bracketing interval, rounded to "
+        "0.01, refined with further heaps until within 1 deg; chosen = the measured "
+        "mu_r whose angle is nearest the target",
+        "heaps": [
+            {"sliding_friction": sliding, "rolling_friction": m, "repose_angle_deg": round(heaps[m], 2)}
+            for m in sorted(heaps)
+        ],
+        "chosen": {
+            "sliding_friction": sliding,
+            "rolling_friction": chosen,
+            "repose_angle_deg": round(heaps[chosen], 2),
+        },
         "heap_runs": records,
     }
     manifest = R.MANIFEST if not tiny else R.WORK_DIR / "calibration_tiny.json"
@@ -108,23 +118,34 @@ def calibrate(tiny: bool = False, collapses: bool = True, grid=ROLLING_GRID,
         p = mk(sliding=sliding, rolling=mur)
         res = R.run_collapse(p, tiny=tiny, official=(mur == chosen and not tiny))
         f = res["entry"]["final"]
-        rows.append((sliding, mur, heaps[mur], f["runout_m"], f["wall_height_m"],
-                     f["runout_p99_grain_x_m"]))
-        print(f"collapse mu_r={mur}: runout {f['runout_m']} m, wall {f['wall_height_m']} m "
-              f"({res['entry']['wall_time_s']} s)", flush=True)
+        rows.append((sliding, mur, heaps[mur], f["runout_m"], f["wall_height_m"], f["runout_p99_grain_x_m"]))
+        print(
+            f"collapse mu_r={mur}: runout {f['runout_m']} m, wall {f['wall_height_m']} m "
+            f"({res['entry']['wall_time_s']} s)",
+            flush=True,
+        )
     out = R.DATA_DIR if not tiny else R.WORK_DIR / "tiny_sensitivity"
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "sensitivity.csv", "w", newline="") as fh:
-        fh.write(f"# Runout sensitivity to the DEM friction. repose_angle_deg: heap test "
-                 f"(calibrate.py); runout_m, wall_height_m: final deposit of the column "
-                 f"collapse (run.py; runout where the volume-equivalent height < 0.5 d_mean); "
-                 f"p99_x_m: 99th percentile of grain x. Chosen: mu_s={sliding}, mu_r={chosen}\n")
+        fh.write(
+            f"# Runout sensitivity to the DEM friction. repose_angle_deg: heap test "
+            f"(calibrate.py); runout_m, wall_height_m: final deposit of the column "
+            f"collapse (run.py; runout where the volume-equivalent height < 0.5 d_mean); "
+            f"p99_x_m: 99th percentile of grain x. Chosen: mu_s={sliding}, mu_r={chosen}\n"
+        )
         w = csv.writer(fh)
-        w.writerow(["sliding_friction", "rolling_friction", "repose_angle_deg", "runout_m",
-                    "wall_height_m", "p99_x_m"])
+        w.writerow(
+            [
+                "sliding_friction",
+                "rolling_friction",
+                "repose_angle_deg",
+                "runout_m",
+                "wall_height_m",
+                "p99_x_m",
+            ]
+        )
         for r in sorted(rows, key=lambda r: r[1]):
-            w.writerow([f"{r[0]:g}", f"{r[1]:g}", f"{r[2]:.2f}", f"{r[3]:.4f}", f"{r[4]:.4f}",
-                        f"{r[5]:.4f}"])
+            w.writerow([f"{r[0]:g}", f"{r[1]:g}", f"{r[2]:.2f}", f"{r[3]:.4f}", f"{r[4]:.4f}", f"{r[5]:.4f}"])
     cal["sensitivity_csv"] = str(C._rel(out / "sensitivity.csv"))
     if not tiny:
         C.set_manifest_section(manifest, "calibration", cal)
@@ -143,8 +164,11 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tiny", action="store_true")
     ap.add_argument("--skip-collapses", action="store_true", help="heaps only")
-    ap.add_argument("--reuse-heaps", action="store_true",
-                    help="reduce existing heap dumps in work/ again instead of re-running them")
+    ap.add_argument(
+        "--reuse-heaps",
+        action="store_true",
+        help="reduce existing heap dumps in work/ again instead of re-running them",
+    )
     ap.add_argument("--nice", type=int, default=0)
     a = ap.parse_args(argv)
     if a.nice:

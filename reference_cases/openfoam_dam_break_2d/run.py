@@ -24,6 +24,7 @@ are reduced to
 
 plus the water area (sum alpha dx dy, per unit depth) to check conservation.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -47,10 +48,10 @@ DATA_DIR = CASE_DIR / "data"
 WORK_DIR = CASE_DIR / "work"
 MANIFEST = CASE_DIR / "manifest.json"
 
-A = 0.05715          # column width a [m] (2.25 in)
-H0 = 2.0 * A         # column height [m]
-LX = 8.0 * A         # tank length [m]
-LY = 3.0 * A         # tank height [m]
+A = 0.05715  # column width a [m] (2.25 in)
+H0 = 2.0 * A  # column height [m]
+LX = 8.0 * A  # tank length [m]
+LY = 3.0 * A  # tank height [m]
 G = 9.81
 T_END = 0.33
 WRITE_INTERVAL = 0.005
@@ -64,13 +65,20 @@ FOAM_ENV = {"WM_PROJECT_DIR": "/usr/share/openfoam"}
 def case_values(cells_per_a: int, end_time: float, ranks: int) -> dict:
     dx = A / cells_per_a
     return {
-        "LX": C.fmt(LX, 10), "LY": C.fmt(LY, 10), "DZ": C.fmt(dx, 10),
-        "NX": 8 * cells_per_a, "NY": 3 * cells_per_a,
-        "A": C.fmt(A, 10), "H0": C.fmt(H0, 10),
-        "END_TIME": C.fmt(end_time), "WRITE_INTERVAL": C.fmt(WRITE_INTERVAL),
-        "DELTA_T0": C.fmt(min(1e-4, 0.05 * dx)), "MAX_CO": C.fmt(MAX_CO),
+        "LX": C.fmt(LX, 10),
+        "LY": C.fmt(LY, 10),
+        "DZ": C.fmt(dx, 10),
+        "NX": 8 * cells_per_a,
+        "NY": 3 * cells_per_a,
+        "A": C.fmt(A, 10),
+        "H0": C.fmt(H0, 10),
+        "END_TIME": C.fmt(end_time),
+        "WRITE_INTERVAL": C.fmt(WRITE_INTERVAL),
+        "DELTA_T0": C.fmt(min(1e-4, 0.05 * dx)),
+        "MAX_CO": C.fmt(MAX_CO),
         # pressure reference: in the air, half a cell under the lid near the right wall
-        "PREF_X": C.fmt(LX - 0.5 * dx, 10), "PREF_Y": C.fmt(LY - 0.5 * dx, 10),
+        "PREF_X": C.fmt(LX - 0.5 * dx, 10),
+        "PREF_Y": C.fmt(LY - 0.5 * dx, 10),
         "PREF_Z": C.fmt(0.5 * dx, 10),
         "RANKS": ranks,
     }
@@ -103,10 +111,10 @@ def read_internal_field(path: Path, n_cells: int | None = None) -> np.ndarray:
         val = np.array(u.group(1).strip("() ").split(), float)
         return np.tile(val, (n_cells, 1)).squeeze()
     kind, n = m.group(1), int(m.group(2))
-    body = text[m.end(): text.index(")\n;", m.end()) if kind == "scalar" else None]
+    body = text[m.end() : text.index(")\n;", m.end()) if kind == "scalar" else None]
     if kind == "vector":
         end = text.index("\n)\n", m.end())
-        body = text[m.end():end].replace("(", " ").replace(")", " ")
+        body = text[m.end() : end].replace("(", " ").replace(")", " ")
         arr = np.array(body.split(), float).reshape(n, 3)
     else:
         arr = np.array(body.split(), float)
@@ -157,13 +165,11 @@ def reduce_fields(case: Path, cells_per_a: int) -> dict:
         front.append(x_front)
         hwall.append(float(np.clip(alpha[wall], 0.0, 1.0).sum() * dx))
         area.append(float(alpha.sum() * dx * dx))
-    return {"t": np.array(t_list), "front": np.array(front), "wall": np.array(hwall),
-            "area": np.array(area)}
+    return {"t": np.array(t_list), "front": np.array(front), "wall": np.array(hwall), "area": np.array(area)}
 
 
 def foam_version(log: Path) -> str:
-    m = re.search(r"^Build\s*:\s*OPENFOAM=(\d+)(?:\s+patch=(\d+))?", log.read_text(errors="replace"),
-                  re.M)
+    m = re.search(r"^Build\s*:\s*OPENFOAM=(\d+)(?:\s+patch=(\d+))?", log.read_text(errors="replace"), re.M)
     if not m:
         return "unknown"
     return f"v{m.group(1)}" + (f" (patch {m.group(2)})" if m.group(2) else "")
@@ -173,16 +179,23 @@ def solver_stats(log: Path) -> dict:
     text = log.read_text(errors="replace")
     dts = [float(x) for x in re.findall(r"^deltaT = (\S+)", text, re.M)]
     cos = [float(x) for x in re.findall(r"^Courant Number mean: \S+ max: (\S+)", text, re.M)]
-    return {"time_steps": len(re.findall(r"^Time = ", text, re.M)),
-            "deltaT_min_s": min(dts) if dts else None,
-            "deltaT_max_s": max(dts) if dts else None,
-            "courant_max_seen": max(cos) if cos else None}
+    return {
+        "time_steps": len(re.findall(r"^Time = ", text, re.M)),
+        "deltaT_min_s": min(dts) if dts else None,
+        "deltaT_max_s": max(dts) if dts else None,
+        "courant_max_seen": max(cos) if cos else None,
+    }
 
 
 # ----------------------------------------------------------------------------- pipeline
-def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
-             out: Path | None = None, end_time: float | None = None,
-             keep_fields: bool = True) -> dict:
+def run_case(
+    cells_per_a: int = 20,
+    ranks: int = 1,
+    tiny: bool = False,
+    out: Path | None = None,
+    end_time: float | None = None,
+    keep_fields: bool = True,
+) -> dict:
     C.require("blockMesh", "setFields", "interFoam", "postProcess")
     if ranks > 1:
         C.require("decomposePar", "reconstructPar", "mpirun")
@@ -192,7 +205,7 @@ def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
     end_time = end_time or T_END
     label = f"dx{cells_per_a}" + ("" if ranks == 1 else f"_np{ranks}") + ("_tiny" if tiny else "")
     work = WORK_DIR / label
-    official = (out is None and not tiny)
+    official = out is None and not tiny
     out = Path(out) if out is not None else (DATA_DIR if not tiny else work / "reduced")
     values = case_values(cells_per_a, end_time, ranks)
     write_case(work, values)
@@ -208,26 +221,33 @@ def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
         solver_wall = C.run(["interFoam"], work, logs / "interFoam.log", env, cmds)
     else:
         C.run(["decomposePar", "-force"], work, logs / "decomposePar.log", env, cmds)
-        solver_wall = C.run(C.mpirun_prefix(ranks) + ["interFoam", "-parallel"], work,
-                            logs / "interFoam.log", env, cmds)
+        solver_wall = C.run(
+            C.mpirun_prefix(ranks) + ["interFoam", "-parallel"], work, logs / "interFoam.log", env, cmds
+        )
         C.run(["reconstructPar"], work, logs / "reconstructPar.log", env, cmds)
-    C.run(["postProcess", "-func", "writeCellCentres", "-time", "0"], work,
-          logs / "writeCellCentres.log", env, cmds)
+    C.run(
+        ["postProcess", "-func", "writeCellCentres", "-time", "0"],
+        work,
+        logs / "writeCellCentres.log",
+        env,
+        cmds,
+    )
     t_red = time.perf_counter()
     series = reduce_fields(work, cells_per_a)
     total_wall = time.perf_counter() - t0
 
     version = foam_version(logs / "interFoam.log")
     n_cells = 8 * cells_per_a * 3 * cells_per_a
-    csv_path = out / (f"openfoam_dx{cells_per_a}" + ("" if ranks == 1 else f"_np{ranks}")
-                      + ".csv")
+    csv_path = out / (f"openfoam_dx{cells_per_a}" + ("" if ranks == 1 else f"_np{ranks}") + ".csv")
     with open(csv_path, "w", newline="") as fh:
-        fh.write(f"# tool=OpenFOAM {version} interFoam (laminar VOF), Debian package openfoam "
-                 f"{C.debian_package_version('openfoam')}; mesh={8*cells_per_a}x{3*cells_per_a}x1 "
-                 f"uniform cells, dx=a/{cells_per_a}={A/cells_per_a:.6g} m; ranks={ranks}; "
-                 f"a={A} m; H0={H0} m; tank {LX:.5g} x {LY:.5g} m closed; "
-                 f"front=largest x with alpha.water>0.5 in bottom cell row (interpolated); "
-                 f"wall_height=sum(alpha.water*dy) over first cell column\n")
+        fh.write(
+            f"# tool=OpenFOAM {version} interFoam (laminar VOF), Debian package openfoam "
+            f"{C.debian_package_version('openfoam')}; mesh={8 * cells_per_a}x{3 * cells_per_a}x1 "
+            f"uniform cells, dx=a/{cells_per_a}={A / cells_per_a:.6g} m; ranks={ranks}; "
+            f"a={A} m; H0={H0} m; tank {LX:.5g} x {LY:.5g} m closed; "
+            f"front=largest x with alpha.water>0.5 in bottom cell row (interpolated); "
+            f"wall_height=sum(alpha.water*dy) over first cell column\n"
+        )
         w = csv.writer(fh)
         w.writerow(["t_s", "front_x_m", "wall_height_m"])
         for t, xf, hw in zip(series["t"], series["front"], series["wall"]):
@@ -237,10 +257,15 @@ def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
     drift = float(np.max(np.abs(series["area"] - area0)) / area0)
     entry = {
         "date_utc": C.now_iso(),
-        "cells_per_a": cells_per_a, "dx_m": A / cells_per_a,
-        "mesh": f"{8*cells_per_a} x {3*cells_per_a} x 1", "n_cells": n_cells,
-        "ranks": ranks, "end_time_s": end_time, "write_interval_s": WRITE_INTERVAL,
-        "max_courant": MAX_CO, "tiny": tiny,
+        "cells_per_a": cells_per_a,
+        "dx_m": A / cells_per_a,
+        "mesh": f"{8 * cells_per_a} x {3 * cells_per_a} x 1",
+        "n_cells": n_cells,
+        "ranks": ranks,
+        "end_time_s": end_time,
+        "write_interval_s": WRITE_INTERVAL,
+        "max_courant": MAX_CO,
+        "tiny": tiny,
         "wall_time_total_s": round(total_wall, 1),
         "wall_time_solver_s": round(solver_wall, 1),
         "wall_time_reduction_s": round(time.perf_counter() - t_red, 1),
@@ -253,24 +278,32 @@ def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
     }
     top = {
         "case": "Martin & Moyce (1952) 2D dam break, interFoam laminar VOF",
-        "tool": {"name": "OpenFOAM (interFoam)", "version": version,
-                 "debian_package": f"openfoam {C.debian_package_version('openfoam')}",
-                 "mpi": f"openmpi-bin {C.debian_package_version('openmpi-bin')}"},
-        "reproduce": "python -m reference_cases.openfoam_dam_break_2d.run --cells-per-a N "
-                     "[--ranks 2]",
+        "tool": {
+            "name": "OpenFOAM (interFoam)",
+            "version": version,
+            "debian_package": f"openfoam {C.debian_package_version('openfoam')}",
+            "mpi": f"openmpi-bin {C.debian_package_version('openmpi-bin')}",
+        },
+        "reproduce": "python -m reference_cases.openfoam_dam_break_2d.run --cells-per-a N [--ranks 2]",
         "parameters": {
-            "a_m": A, "H0_m": H0, "tank_m": [LX, LY], "closed_tank": True,
-            "water": {"rho": 1000, "nu": 1e-6}, "air": {"rho": 1, "nu": 1.48e-5},
-            "sigma_N_per_m": 0.07, "g": G, "t_end_s": T_END,
+            "a_m": A,
+            "H0_m": H0,
+            "tank_m": [LX, LY],
+            "closed_tank": True,
+            "water": {"rho": 1000, "nu": 1e-6},
+            "air": {"rho": 1, "nu": 1.48e-5},
+            "sigma_N_per_m": 0.07,
+            "g": G,
+            "t_end_s": T_END,
             "T_end_dimensionless": T_END * math.sqrt(2 * G / A),
             "walls": "noSlip U, fixedFluxPressure p_rgh, zeroGradient alpha (90 deg contact)",
             "numerics": "Euler, MULES with cAlpha 1, PIMPLE 1 outer / 3 p corrections, "
-                        f"maxCo = maxAlphaCo = {MAX_CO}",
+            f"maxCo = maxAlphaCo = {MAX_CO}",
         },
         "environment": FOAM_ENV,
         "source": "Martin, J.C. & Moyce, W.J. (1952) Part IV. An experimental study of the "
-                  "collapse of liquid columns on a rigid horizontal plane. Phil. Trans. R. Soc. "
-                  "Lond. A 244, 312-324.",
+        "collapse of liquid columns on a rigid horizontal plane. Phil. Trans. R. Soc. "
+        "Lond. A 244, 312-324.",
     }
     if official:
         C.update_manifest(MANIFEST, label, entry, top)
@@ -278,8 +311,7 @@ def run_case(cells_per_a: int = 20, ranks: int = 1, tiny: bool = False,
         if conv:
             C.set_manifest_section(MANIFEST, "mesh_convergence", conv)
     else:
-        (out / "manifest.json").write_text(json.dumps({**top, "runs": {label: entry}},
-                                                      indent=2) + "\n")
+        (out / "manifest.json").write_text(json.dumps({**top, "runs": {label: entry}}, indent=2) + "\n")
     if not keep_fields:
         for t, d in time_dirs(work):
             if t > 0:
@@ -322,9 +354,9 @@ def mesh_comparison(data_dir: Path) -> dict | None:
         # time at which the front reaches x = 4a (Z = 4), a robust scalar
         out["pairs"][f"dx{n}_vs_dx{finest}"] = {
             "front_max_abs_diff_over_a": round(float(d_front.max()), 4),
-            "front_rms_diff_over_a": round(float(np.sqrt(np.mean(d_front ** 2))), 4),
+            "front_rms_diff_over_a": round(float(np.sqrt(np.mean(d_front**2))), 4),
             "wall_height_max_abs_diff_over_a": round(float(d_wall.max()), 4),
-            "wall_height_rms_diff_over_a": round(float(np.sqrt(np.mean(d_wall ** 2))), 4),
+            "wall_height_rms_diff_over_a": round(float(np.sqrt(np.mean(d_wall**2))), 4),
             "T_at_Z4": [round(_t_at(s, 4 * A), 3), round(_t_at(ref, 4 * A), 3)],
             "compared_times": int(ok.sum()),
         }
@@ -348,21 +380,27 @@ def main(argv=None) -> int:
     p.add_argument("--cells-per-a", type=int, default=20, help="cells per column width a")
     p.add_argument("--ranks", type=int, default=1, choices=[1, 2])
     p.add_argument("--tiny", action="store_true", help="a/10 mesh to t = 0.1 s (seconds)")
-    p.add_argument("--out", type=Path, default=None,
-                   help="output dir for the CSV (default: data/, or work/<run>/reduced for --tiny)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output dir for the CSV (default: data/, or work/<run>/reduced for --tiny)",
+    )
     p.add_argument("--end-time", type=float, default=None)
     p.add_argument("--nice", type=int, default=0, help="raise the niceness of the tool runs")
-    p.add_argument("--drop-fields", action="store_true",
-                   help="delete the written time folders after the reduction")
+    p.add_argument(
+        "--drop-fields", action="store_true", help="delete the written time folders after the reduction"
+    )
     a = p.parse_args(argv)
     if a.nice:
         os.nice(a.nice)
-    res = run_case(a.cells_per_a, a.ranks, a.tiny, a.out, a.end_time,
-                   keep_fields=not a.drop_fields)
+    res = run_case(a.cells_per_a, a.ranks, a.tiny, a.out, a.end_time, keep_fields=not a.drop_fields)
     e = res["entry"]
-    print(f"{res['label']}: {e['n_cells']} cells, {e['solver']['time_steps']} steps, "
-          f"wall {e['wall_time_total_s']} s (solver {e['wall_time_solver_s']} s), "
-          f"water area drift {e['water_area_max_rel_change']:.2e}; wrote {res['csv']}")
+    print(
+        f"{res['label']}: {e['n_cells']} cells, {e['solver']['time_steps']} steps, "
+        f"wall {e['wall_time_total_s']} s (solver {e['wall_time_solver_s']} s), "
+        f"water area drift {e['water_area_max_rel_change']:.2e}; wrote {res['csv']}"
+    )
     return 0
 
 

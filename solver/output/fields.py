@@ -10,7 +10,7 @@ OUTPUT_TO_ARRAY = {
     "acceleration": "acc",
     "id": "id",
 }
-ALWAYS = ("position", "id", "material", "rank")   # rank: which process owned it (MPI)
+ALWAYS = ("position", "id", "material", "rank")  # rank: which process owned it (MPI)
 
 
 def requested_fields(scene, particles):

@@ -20,17 +20,35 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     cloud = particles_polydata(fields)
     if scalar not in cloud.point_data:
         scalar = "material"
-    lo, hi = (np.asarray(domain[0], float), np.asarray(domain[1], float)) if domain is not None else \
-        (cloud.points.min(axis=0)[:2], cloud.points.max(axis=0)[:2])
+    lo, hi = (
+        (np.asarray(domain[0], float), np.asarray(domain[1], float))
+        if domain is not None
+        else (cloud.points.min(axis=0)[:2], cloud.points.max(axis=0)[:2])
+    )
     aspect = float((hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-12))
     # 20 % wider than the domain: tight() centres the domain, the colour bar sits in the margin
     plotter = pv.Plotter(off_screen=True, window_size=(1600, int(np.clip(1600 / 1.2 * aspect, 300, 1400))))
     plotter.set_background("white")
-    span = np.ptp(np.asarray(domain), axis=0).max() if domain is not None else np.ptp(cloud.points, axis=0).max()
+    span = (
+        np.ptp(np.asarray(domain), axis=0).max() if domain is not None else np.ptp(cloud.points, axis=0).max()
+    )
     size = point_size or max(2.0, 1200.0 / max(span / max(_spacing(cloud.points), 1e-12), 1.0))
-    plotter.add_mesh(cloud, scalars=scalar, point_size=size, render_points_as_spheres=True, cmap="viridis",
-                     scalar_bar_args={"title": scalar, "color": "black", "vertical": True, "position_x": 0.925,
-                                      "position_y": 0.1, "width": 0.05, "height": 0.8})
+    plotter.add_mesh(
+        cloud,
+        scalars=scalar,
+        point_size=size,
+        render_points_as_spheres=True,
+        cmap="viridis",
+        scalar_bar_args={
+            "title": scalar,
+            "color": "black",
+            "vertical": True,
+            "position_x": 0.925,
+            "position_y": 0.1,
+            "width": 0.05,
+            "height": 0.8,
+        },
+    )
     if domain is not None:
         box = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], 0, 0))
         plotter.add_mesh(box, style="wireframe", color="black")

@@ -46,6 +46,11 @@ class VtkSeries:
         with atomic_path(self.out / rel) as tmp:
             particles_polydata(fields).save(tmp)
         self.entries.append((t, rel))
-        rows = "\n".join(f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(f)}/>' for t, f in self.entries)
-        atomic_write_text(self.path, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                                     f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+        rows = "\n".join(
+            f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(f)}/>' for t, f in self.entries
+        )
+        atomic_write_text(
+            self.path,
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+            f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n",
+        )

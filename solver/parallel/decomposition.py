@@ -24,9 +24,9 @@ BINS = 1024
 
 @dataclass
 class Decomposition:
-    lo: np.ndarray      # (size, dim) owner boxes, -inf on the domain's lower faces
-    hi: np.ndarray      # (size, dim) +inf on the domain's upper faces
-    region_lo: np.ndarray   # (size, dim) the same boxes clipped to the domain (for reports)
+    lo: np.ndarray  # (size, dim) owner boxes, -inf on the domain's lower faces
+    hi: np.ndarray  # (size, dim) +inf on the domain's upper faces
+    region_lo: np.ndarray  # (size, dim) the same boxes clipped to the domain (for reports)
     region_hi: np.ndarray
 
     @property
@@ -88,7 +88,7 @@ def bisect(x: np.ndarray, size: int, domain_lo, domain_hi, allreduce=None) -> De
         counts2 = _node_histogram(np.where(in_bin, coord, np.inf), label, sub_lo, sub_w, k, reduce)
         cum2 = below[:, None] + np.cumsum(counts2, axis=1)
         c = np.array([min(int(np.searchsorted(cum2[i], target[i], side="left")), BINS - 1) for i in range(k)])
-        cut = sub_lo + (c + 1) * sub_w          # upper edge of the sub-bin where the target is reached
+        cut = sub_lo + (c + 1) * sub_w  # upper edge of the sub-bin where the target is reached
         cut = np.where(total > 0, cut, 0.5 * (a_lo + a_hi))
         new_nodes = []
         new_label = np.empty_like(label)

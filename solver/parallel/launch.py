@@ -11,8 +11,16 @@ import os
 
 from .communicator import SerialCommunicator
 
-_MPI_ENV = ("PMI_RANK", "PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "HYDRA_CONTROL_FD", "PMI_FD",
-            "PMIX_RANK", "MV2_COMM_WORLD_SIZE", "MPI_LOCALNRANKS")
+_MPI_ENV = (
+    "PMI_RANK",
+    "PMI_SIZE",
+    "OMPI_COMM_WORLD_SIZE",
+    "HYDRA_CONTROL_FD",
+    "PMI_FD",
+    "PMIX_RANK",
+    "MV2_COMM_WORLD_SIZE",
+    "MPI_LOCALNRANKS",
+)
 
 
 def communicator():
@@ -20,7 +28,9 @@ def communicator():
     if forced == "0" or (forced != "1" and not any(k in os.environ for k in _MPI_ENV)):
         return SerialCommunicator()
     from mpi4py import MPI
+
     if MPI.COMM_WORLD.size == 1:
         return SerialCommunicator()
     from .mpi_communicator import MpiCommunicator
+
     return MpiCommunicator(MPI.COMM_WORLD)

@@ -40,7 +40,7 @@ class CommStats:
 
     def __init__(self):
         self.time = defaultdict(float)
-        self.cpu = 0.0                   # CPU time of this process inside communication calls
+        self.cpu = 0.0  # CPU time of this process inside communication calls
         self.calls = defaultdict(int)
         self.ghost_builds = 0
         self.ghosts_sum = 0
@@ -64,10 +64,16 @@ class CommStats:
 
     def as_dict(self):
         return {
-            "time_s": dict(self.time), "comm_cpu_s": self.cpu, "calls": dict(self.calls),
-            "ghosts_last": self.ghosts_last, "ghosts_max": self.ghosts_max,
-            "ghosts_mean": self.ghosts_sum / max(self.ghost_builds, 1), "halo_builds": self.ghost_builds,
-            "migrated": self.migrated, "rebalances": self.rebalances, "imbalance_last": self.imbalance_last,
+            "time_s": dict(self.time),
+            "comm_cpu_s": self.cpu,
+            "calls": dict(self.calls),
+            "ghosts_last": self.ghosts_last,
+            "ghosts_max": self.ghosts_max,
+            "ghosts_mean": self.ghosts_sum / max(self.ghost_builds, 1),
+            "halo_builds": self.ghost_builds,
+            "migrated": self.migrated,
+            "rebalances": self.rebalances,
+            "imbalance_last": self.imbalance_last,
             "halo_refresh_bytes_sent": self.refresh_bytes,
         }
 
@@ -96,7 +102,7 @@ class MpiCommunicator:
         self.rebalance_every = 100
         self.imbalance_threshold = 1.1
         self._rebalance = False
-        self._halo = None          # (send rows, send counts, recv counts)
+        self._halo = None  # (send rows, send counts, recv counts)
         self._layouts = {}
         # Waiting: poll for `spin` seconds, then sleep `nap` between polls, so a rank that waits
         # for a slower peer gives its core away instead of busy-polling (MPICH's default). On a
@@ -186,10 +192,10 @@ class MpiCommunicator:
         reqs = []
         for r in range(self.size):
             if recv_counts[r]:
-                reqs.append(self.comm.Irecv([recv[r_off[r]:r_off[r + 1]], MPI.BYTE], source=r, tag=tag))
+                reqs.append(self.comm.Irecv([recv[r_off[r] : r_off[r + 1]], MPI.BYTE], source=r, tag=tag))
         for r in range(self.size):
             if send_counts[r]:
-                reqs.append(self.comm.Isend([send[s_off[r]:s_off[r + 1]], MPI.BYTE], dest=r, tag=tag))
+                reqs.append(self.comm.Isend([send[s_off[r] : s_off[r + 1]], MPI.BYTE], dest=r, tag=tag))
         self._wait(reqs)
         return recv
 
@@ -231,7 +237,7 @@ class MpiCommunicator:
             ids = ps.owned("id")
             sig = (len(ids), int(ids.sum()) if len(ids) else 0)
             sigs = self.comm.allgather(sig)
-            if all(s == sigs[0] for s in sigs):          # replicated start: no communication
+            if all(s == sigs[0] for s in sigs):  # replicated start: no communication
                 self.decomposition = bisect(x, self.size, self.domain_lo, self.domain_hi)
                 keep = self.decomposition.owner(x, self.rank) == self.rank
                 ps.remove_owned(keep)
@@ -240,10 +246,12 @@ class MpiCommunicator:
             self._rebalance = True
         if self._rebalance:
             t1 = time.perf_counter()
-            self.decomposition = bisect(x, self.size, self.domain_lo, self.domain_hi, allreduce=self._sum_array)
+            self.decomposition = bisect(
+                x, self.size, self.domain_lo, self.domain_hi, allreduce=self._sum_array
+            )
             self._rebalance = False
             self.stats.rebalances += 1
-            t0 += time.perf_counter() - t1        # bisection time is booked as "rebalance"
+            t0 += time.perf_counter() - t1  # bisection time is booked as "rebalance"
         owner = self.decomposition.owner(x, self.rank)
         leave = np.flatnonzero(owner != self.rank)
         dest = owner[leave]
@@ -369,10 +377,12 @@ class MpiCommunicator:
 
     def _print_and_abort(self, kind, value, tb, status):
         text = "".join(traceback.format_exception(kind, value, tb))
-        sys.stderr.write(f"scoursph: error on rank {self.rank} of {self.size} "
-                         f"(ending all ranks): {kind.__name__}: {value}\n{text}")
+        sys.stderr.write(
+            f"scoursph: error on rank {self.rank} of {self.size} "
+            f"(ending all ranks): {kind.__name__}: {value}\n{text}"
+        )
         sys.stderr.flush()
-        time.sleep(0.2)     # let the launcher forward this rank's output before it kills the job
+        time.sleep(0.2)  # let the launcher forward this rank's output before it kills the job
         MPI.COMM_WORLD.Abort(status)
 
     # -- reports -----------------------------------------------------------------------------

@@ -45,7 +45,7 @@ def unpack(buf: np.ndarray, arrays: dict, layout, first: int):
     for name, b0, b1 in layout:
         dst = arrays[name]
         vals = np.ascontiguousarray(buf[:, b0:b1]).view(dst.dtype)
-        dst[first:first + n] = vals.reshape(dst[first:first + n].shape)
+        dst[first : first + n] = vals.reshape(dst[first : first + n].shape)
 
 
 def unpack_dict(buf: np.ndarray, dtypes: dict, shapes: dict, layout) -> dict:

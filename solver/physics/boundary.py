@@ -124,11 +124,13 @@ def refresh_image_tensor(first, src, sign, sym_axes, tensor):
 
 
 @kernel  # images are a thin layer: a serial loop
-def frictional_images(first, src, offset, fric_axis, fric_side, mu, mean_stress, stress, vsign, x, v, rho, gravity, v_stick):
+def frictional_images(
+    first, src, offset, fric_axis, fric_side, mu, mean_stress, stress, vsign, x, v, rho, gravity, v_stick
+):
     """Stick/slip of images across frictional walls (fric_axis[k] = wall normal axis, -1 = not
     frictional; fric_side[k] = +1 lower wall, -1 upper): the normal stress at the wall is the
-    source's extrapolated to the wall plane by rho g_n times the distance; updates the image's velocity signs and
-    sets its shear stress (see module doc). Stick: |v_t| <= v_stick and |tau| <= mu sigma_n
+    source's extrapolated to the wall plane by rho g_n times the distance; updates the image's velocity
+    signs and sets its shear stress (see module doc). Stick: |v_t| <= v_stick and |tau| <= mu sigma_n
     (no-slip image, T' = T). Slip: the wall's shear traction is mu sigma_n, opposing the sliding
     velocity (or along tau when slip starts from rest), by tau' = 2 tau_w - tau. Returns the
     number of slipping images."""
@@ -142,10 +144,12 @@ def frictional_images(first, src, offset, fric_axis, fric_side, mu, mean_stress,
         i = first + k
         # compression positive, extrapolated from the source to the wall plane (offset = 2 x plane)
         # by the weight of the layer between them, d sigma_n / dn = rho g_n (static equilibrium)
-        sigma_n = max(mean_stress[j] - stress[j, a] + rho[j] * abs(gravity[a]) * abs(x[j, a] - 0.5 * offset[k, a]), 0.0)
-        c1 = 3 if a != 2 else 5                                # shear components on the wall plane
+        sigma_n = max(
+            mean_stress[j] - stress[j, a] + rho[j] * abs(gravity[a]) * abs(x[j, a] - 0.5 * offset[k, a]), 0.0
+        )
+        c1 = 3 if a != 2 else 5  # shear components on the wall plane
         c2 = 5 if a == 0 else 4
-        b1 = 1 if a == 0 else 0                                # their tangential axes
+        b1 = 1 if a == 0 else 0  # their tangential axes
         b2 = 1 if a == 2 else 2
         t1 = stress[j, c1] if b1 < dim else 0.0
         t2 = stress[j, c2] if b2 < dim else 0.0
@@ -161,10 +165,10 @@ def frictional_images(first, src, offset, fric_axis, fric_side, mu, mean_stress,
                 vsign[k, b] = 1.0 if slip else -1.0
         if slip:
             slipping += 1
-            if sliding:                                        # kinetic: oppose the sliding velocity
+            if sliding:  # kinetic: oppose the sliding velocity
                 w1 = fric_side[k] * limit * u1 / speed
                 w2 = fric_side[k] * limit * u2 / speed
-            else:                                              # slip starts: along the driving shear
+            else:  # slip starts: along the driving shear
                 w1 = limit * t1 / tau
                 w2 = limit * t2 / tau
             if b1 < dim:
@@ -186,12 +190,16 @@ class ImageWalls:
         self.offset = np.zeros((0, dim))
         self.any = bool(self.has_lo.any() or self.has_hi.any())
         kinds = [(getattr(scene.walls, f"{ax}_min"), getattr(scene.walls, f"{ax}_max")) for ax in "xyz"[:dim]]
-        self.no_slip_lo = np.array([k[0] in ("no_slip", "frictional") for k in kinds])   # frictional: no slip while stuck
+        self.no_slip_lo = np.array(
+            [k[0] in ("no_slip", "frictional") for k in kinds]
+        )  # frictional: no slip while stuck
         self.no_slip_hi = np.array([k[1] in ("no_slip", "frictional") for k in kinds])
         self.frictional_lo = np.array([k[0] == "frictional" for k in kinds])
         self.frictional_hi = np.array([k[1] == "frictional" for k in kinds])
         self.frictional = bool(self.frictional_lo.any() or self.frictional_hi.any())
-        self.mu = float(np.tan(np.radians(scene.walls.friction_angle or 0.0)))   # set whenever a wall is frictional
+        self.mu = float(
+            np.tan(np.radians(scene.walls.friction_angle or 0.0))
+        )  # set whenever a wall is frictional
         self.fric_axis = np.zeros(0, dtype=np.int64)
         self.fric_side = np.zeros(0)
         self.vsign = None
@@ -211,11 +219,16 @@ class ImageWalls:
             find_images(*args, self.src, self.sign, self.offset)
         self.n = n
         if self.no_slip_lo.any() or self.no_slip_hi.any():
-            self.vsign = _velocity_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
-            self.tsign = _tensor_signs(self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi)
+            self.vsign = _velocity_signs(
+                self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi
+            )
+            self.tsign = _tensor_signs(
+                self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi
+            )
         if self.frictional:
-            self.fric_axis, self.fric_side = _frictional_axes(self.sign[:n], self.offset[:n], self.lo, self.hi,
-                                              self.frictional_lo, self.frictional_hi)
+            self.fric_axis, self.fric_side = _frictional_axes(
+                self.sign[:n], self.offset[:n], self.lo, self.hi, self.frictional_lo, self.frictional_hi
+            )
         particles.ensure_capacity(n_local + n)
         particles.n_image = n
 

@@ -68,7 +68,7 @@ def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, 
                 g22 += w2 * d2
         mu = viscosity[material[i]]
         third_div = (g00 + g11 + g22) / 3.0
-        tau[i, 0] = mu * (2.0 * g00 - 2.0 * third_div)   # eq. (11): g_ab + g_ba - 2/3 div delta_ab
+        tau[i, 0] = mu * (2.0 * g00 - 2.0 * third_div)  # eq. (11): g_ab + g_ba - 2/3 div delta_ab
         tau[i, 1] = mu * (2.0 * g11 - 2.0 * third_div)
         tau[i, 2] = mu * (2.0 * g22 - 2.0 * third_div)
         tau[i, 3] = mu * (g01 + g10)
@@ -78,13 +78,27 @@ def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, 
 
 @kernel(parallel=True)
 def fluid_rates(
-    targets, start, index, x, v, rho, p, mass, material, sound_speed, h, norm,
-    drho, acc,
-    tau=None,                      # viscous stress: eq. (7)-(8) with (10)
-    av_alpha=None, av_beta=None,   # artificial viscosity per material: eq. (19)
-    xsph=None, xsph_eps=0.0,       # XSPH velocity correction out: eq. (22)
-    is3d=None,                     # None in 2D: every z term is pruned at compile time
-    mixed=None,                    # None when the phase has one material: no per-pair look-ups
+    targets,
+    start,
+    index,
+    x,
+    v,
+    rho,
+    p,
+    mass,
+    material,
+    sound_speed,
+    h,
+    norm,
+    drho,
+    acc,
+    tau=None,  # viscous stress: eq. (7)-(8) with (10)
+    av_alpha=None,
+    av_beta=None,  # artificial viscosity per material: eq. (19)
+    xsph=None,
+    xsph_eps=0.0,  # XSPH velocity correction out: eq. (22)
+    is3d=None,  # None in 2D: every z term is pruned at compile time
+    mixed=None,  # None when the phase has one material: no per-pair look-ups
 ):
     """Continuity (6) and momentum (7) for each target; adds into drho and acc."""
     hh = 0.01 * h * h
@@ -118,15 +132,15 @@ def fluid_rates(
             r2 = d0 * d0 + d1 * d1 + d2 * d2
             r = np.sqrt(r2) + 1e-300
             vr = u0 * d0 + u1 * d1 + u2 * d2
-            fr = cubic_spline_dwdr(r, h, norm) / r          # grad_i W_ij = fr x_ij
+            fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij
             m_j = mass[j]
             rho_j = rho[j]
             rj2 = 1.0 / (rho_j * rho_j)
             if drho is not None:
-                d_rho += m_j * vr * fr                      # eq. (6)
-            coef = -(pi_r2 + p[j] * rj2)                    # eq. (7): sigma = -p delta
-            if av_alpha is not None:                        # eq. (19), branch-free: zero unless vr < 0
-                if mixed is not None:                       # pair means of c, alpha, beta
+                d_rho += m_j * vr * fr  # eq. (6)
+            coef = -(pi_r2 + p[j] * rj2)  # eq. (7): sigma = -p delta
+            if av_alpha is not None:  # eq. (19), branch-free: zero unless vr < 0
+                if mixed is not None:  # pair means of c, alpha, beta
                     mj = material[j]
                     c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
                     alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
@@ -137,7 +151,7 @@ def fluid_rates(
             a0 += coef * d0
             a1 += coef * d1
             a2 += coef * d2
-            if tau is not None:                             # eq. (7): + (tau_i/rho_i^2 + tau_j/rho_j^2) . grad W
+            if tau is not None:  # eq. (7): + (tau_i/rho_i^2 + tau_j/rho_j^2) . grad W
                 fm = m_j * fr
                 s00 = tau[i, 0] * ri2 + tau[j, 0] * rj2
                 s11 = tau[i, 1] * ri2 + tau[j, 1] * rj2
@@ -152,7 +166,7 @@ def fluid_rates(
                 else:
                     a0 += fm * (s00 * d0 + s01 * d1)
                     a1 += fm * (s01 * d0 + s11 * d1)
-            if xsph is not None:                            # eq. (22): -eps sum_j (m_j/rho_j) v_ij W_ij
+            if xsph is not None:  # eq. (22): -eps sum_j (m_j/rho_j) v_ij W_ij
                 w = xsph_eps * cubic_spline_w(r, h, norm) * m_j / rho_j
                 x0 -= w * u0
                 x1 -= w * u1

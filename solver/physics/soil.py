@@ -82,8 +82,24 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
 
 
 @kernel(parallel=True)
-def soil_stress_state(rows, rho, s, material, rho0, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi,
-                      yield_model, mean_stress, eps_vp=None, update_history=False):
+def soil_stress_state(
+    rows,
+    rho,
+    s,
+    material,
+    rho0,
+    bulk,
+    shear,
+    tan_phi,
+    cohesion,
+    alpha_phi,
+    k_c,
+    alpha_psi,
+    yield_model,
+    mean_stress,
+    eps_vp=None,
+    update_history=False,
+):
     """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
     return mapping; writes p to mean_stress and the admissible s in place. With
     update_history (after the leap-frog kick) the plastic dilation is accumulated."""
@@ -94,8 +110,22 @@ def soil_stress_state(rows, rho, s, material, rho0, bulk, shear, tan_phi, cohesi
         if eps_vp is not None:
             e += eps_vp[i]
         p, a0, a1, a2, a3, a4, a5, dvol = return_map(
-            bulk[m] * e, s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], yield_model[m],
-            bulk[m], shear[m], tan_phi[m], cohesion[m], alpha_phi[m], k_c[m], alpha_psi[m])
+            bulk[m] * e,
+            s[i, 0],
+            s[i, 1],
+            s[i, 2],
+            s[i, 3],
+            s[i, 4],
+            s[i, 5],
+            yield_model[m],
+            bulk[m],
+            shear[m],
+            tan_phi[m],
+            cohesion[m],
+            alpha_phi[m],
+            k_c[m],
+            alpha_psi[m],
+        )
         mean_stress[i] = p
         s[i, 0] = a0
         s[i, 1] = a1
@@ -156,10 +186,28 @@ def jaumann(s0, s1, s2, s3, s4, s5, w01, w02, w12):
 
 @kernel(parallel=True)
 def soil_rates(
-    targets, start, index, x, v, rho, mean_stress, s, mass, material, sound_speed, shear, h, norm,
-    drho, acc, ds,
-    av_alpha=None, av_beta=None,          # Monaghan artificial viscosity, seed eq. (19)
-    art=None, art_n=2.55, inv_w_dx=0.0,   # artificial stress (Gray et al. 2001): f_ij^n (R_i + R_j)
+    targets,
+    start,
+    index,
+    x,
+    v,
+    rho,
+    mean_stress,
+    s,
+    mass,
+    material,
+    sound_speed,
+    shear,
+    h,
+    norm,
+    drho,
+    acc,
+    ds,
+    av_alpha=None,
+    av_beta=None,  # Monaghan artificial viscosity, seed eq. (19)
+    art=None,
+    art_n=2.55,
+    inv_w_dx=0.0,  # artificial stress (Gray et al. 2001): f_ij^n (R_i + R_j)
 ):
     """Continuity (6), momentum (20) without seepage, and the Hooke-Jaumann rate (13)-(15).
     Adds into drho and acc; writes ds. The velocity gradient is
@@ -183,10 +231,16 @@ def soil_rates(
         q12 = s[i, 4] * ri2
         q02 = s[i, 5] * ri2
         mi = material[i]
-        quiet_i = True                                      # R_i = 0 (no tension): the common case, see below
+        quiet_i = True  # R_i = 0 (no tension): the common case, see below
         if art is not None:
-            quiet_i = (art[i, 0] == 0.0 and art[i, 1] == 0.0 and art[i, 2] == 0.0
-                       and art[i, 3] == 0.0 and art[i, 4] == 0.0 and art[i, 5] == 0.0)
+            quiet_i = (
+                art[i, 0] == 0.0
+                and art[i, 1] == 0.0
+                and art[i, 2] == 0.0
+                and art[i, 3] == 0.0
+                and art[i, 4] == 0.0
+                and art[i, 5] == 0.0
+            )
         d_rho = 0.0
         a0 = a1 = a2 = 0.0
         g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
@@ -201,17 +255,17 @@ def soil_rates(
             r2 = d0 * d0 + d1 * d1 + d2 * d2
             r = np.sqrt(r2) + 1e-300
             vr = u0 * d0 + u1 * d1 + u2 * d2
-            fr = cubic_spline_dwdr(r, h, norm) / r          # grad_i W_ij = fr x_ij
+            fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij
             m_j = mass[j]
             rho_j = rho[j]
             rj2 = 1.0 / (rho_j * rho_j)
-            d_rho += m_j * vr * fr                          # eq. (6)
+            d_rho += m_j * vr * fr  # eq. (6)
             pj = mean_stress[j]
-            t00 = q00 + (s[j, 0] - pj) * rj2                # eq. (20): sigma_i/rho_i^2 + sigma_j/rho_j^2
+            t00 = q00 + (s[j, 0] - pj) * rj2  # eq. (20): sigma_i/rho_i^2 + sigma_j/rho_j^2
             t11 = q11 + (s[j, 1] - pj) * rj2
             t01 = q01 + s[j, 3] * rj2
             diag = 0.0
-            if av_alpha is not None:                        # eq. (19) with beta phi^2 (erratum)
+            if av_alpha is not None:  # eq. (19) with beta phi^2 (erratum)
                 mj = material[j]
                 phi = h * min(vr, 0.0) / (r2 + hh)
                 c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
@@ -219,11 +273,18 @@ def soil_rates(
                 beta = 0.5 * (av_beta[mi] + av_beta[mj])
                 diag -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
             fn = 0.0
-            if art is not None:                             # Gray et al. (2001): + f^n (R_i + R_j)
+            if art is not None:  # Gray et al. (2001): + f^n (R_i + R_j)
                 # skipped when R_i = R_j = 0 (both particles in compression), where it adds exactly
                 # zero: the kernel value and the power f^n were 60 % of a cohesionless soil step
-                if not (quiet_i and art[j, 0] == 0.0 and art[j, 1] == 0.0 and art[j, 2] == 0.0
-                        and art[j, 3] == 0.0 and art[j, 4] == 0.0 and art[j, 5] == 0.0):
+                if not (
+                    quiet_i
+                    and art[j, 0] == 0.0
+                    and art[j, 1] == 0.0
+                    and art[j, 2] == 0.0
+                    and art[j, 3] == 0.0
+                    and art[j, 4] == 0.0
+                    and art[j, 5] == 0.0
+                ):
                     fn = (cubic_spline_w(r, h, norm) * inv_w_dx) ** art_n
                     t00 += fn * (art[i, 0] + art[j, 0])
                     t11 += fn * (art[i, 1] + art[j, 1])
@@ -243,7 +304,7 @@ def soil_rates(
             else:
                 a0 += fm * ((t00 + diag) * d0 + t01 * d1)
                 a1 += fm * (t01 * d0 + (t11 + diag) * d1)
-            f = fr * m_j / rho_j                            # velocity gradient (Liu & Liu 2003)
+            f = fr * m_j / rho_j  # velocity gradient (Liu & Liu 2003)
             w0 = -u0 * f
             w1 = -u1 * f
             g00 += w0 * d0
@@ -262,14 +323,17 @@ def soil_rates(
         acc[i, 1] += a1
         if three:
             acc[i, 2] += a2
-        # eq. (14): strain rate e_ab = (g_ab + g_ba)/2; eq. (15): W_ab = (dv^a/dx^b - dv^b/dx^a)/2 = (g_ba - g_ab)/2
+        # eq. (14): strain rate e_ab = (g_ab + g_ba)/2; eq. (15): W_ab = (dv^a/dx^b - dv^b/dx^a)/2 = (g_ba -
+        # g_ab)/2
         third = (g00 + g11 + g22) / 3.0
         two_g = 2.0 * shear[mi]
         w01 = 0.5 * (g10 - g01)
         w02 = 0.5 * (g20 - g02)
         w12 = 0.5 * (g21 - g12)
-        j00, j11, j22, j01, j12, j02 = jaumann(s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], w01, w02, w12)
-        ds[i, 0] = two_g * (g00 - third) + j00                # eq. (13)
+        j00, j11, j22, j01, j12, j02 = jaumann(
+            s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], w01, w02, w12
+        )
+        ds[i, 0] = two_g * (g00 - third) + j00  # eq. (13)
         ds[i, 1] = two_g * (g11 - third) + j11
         ds[i, 2] = two_g * (g22 - third) + j22
         ds[i, 3] = two_g * 0.5 * (g01 + g10) + j01
@@ -282,9 +346,14 @@ def yield_excess(rows, mean_stress, s, material, soil):
     m = material[rows]
     p = mean_stress[rows]
     ss = s[rows]
-    j = np.sqrt(0.5 * (ss[:, 0] ** 2 + ss[:, 1] ** 2 + ss[:, 2] ** 2) + ss[:, 3] ** 2 + ss[:, 4] ** 2 + ss[:, 5] ** 2)
+    j = np.sqrt(
+        0.5 * (ss[:, 0] ** 2 + ss[:, 1] ** 2 + ss[:, 2] ** 2) + ss[:, 3] ** 2 + ss[:, 4] ** 2 + ss[:, 5] ** 2
+    )
     model = soil.yield_model[m]
-    limit = np.where(model == YIELD_DRUCKER_PRAGER, soil.k_c[m] + 3.0 * soil.alpha_phi[m] * p,
-                     soil.cohesion[m] + soil.tan_phi[m] * p)
+    limit = np.where(
+        model == YIELD_DRUCKER_PRAGER,
+        soil.k_c[m] + 3.0 * soil.alpha_phi[m] * p,
+        soil.cohesion[m] + soil.tan_phi[m] * p,
+    )
     scale = np.maximum(np.abs(p), 1.0) * np.maximum(soil.tan_phi[m], 1e-3) + soil.cohesion[m]
     return np.where(model == YIELD_ELASTIC, -1.0, (j - limit) / scale)

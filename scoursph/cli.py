@@ -9,7 +9,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import BlowUpError, SceneError
+from solver.errors import BlowUpError, SceneError
 
 
 def _parser():
@@ -21,15 +21,30 @@ def _parser():
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--threads", type=int, help="Numba threads per process")
-    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key before validation, e.g. --set numerics.xsph_epsilon=0 (repeatable)")
-    r.add_argument("--rebalance-every", type=int, metavar="N", help="MPI: rebalance the domain cuts every N steps")
-    r.add_argument("--imbalance-threshold", type=float, metavar="X",
-                   help="MPI: rebalance when the largest rank holds more than X times the mean count")
+    r.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key before validation, e.g. --set numerics.xsph_epsilon=0 (repeatable)",
+    )
+    r.add_argument(
+        "--rebalance-every", type=int, metavar="N", help="MPI: rebalance the domain cuts every N steps"
+    )
+    r.add_argument(
+        "--imbalance-threshold",
+        type=float,
+        metavar="X",
+        help="MPI: rebalance when the largest rank holds more than X times the mean count",
+    )
     v = sub.add_parser("verify", help="run a verification case and check it against its references")
     v.add_argument("case", help="case name, or 'all'")
-    v.add_argument("--resolution", type=int, help="particles across the reference length (case default if omitted)")
-    v.add_argument("--study", action="store_true", help="resolution study: error and wall time at 3+ spacings")
+    v.add_argument(
+        "--resolution", type=int, help="particles across the reference length (case default if omitted)"
+    )
+    v.add_argument(
+        "--study", action="store_true", help="resolution study: error and wall time at 3+ spacings"
+    )
     v.add_argument("--out", type=Path, default=Path("runs/verification"))
     v.add_argument("--quiet", action="store_true")
     return p
@@ -44,6 +59,7 @@ def main(argv=None):
     args = _parser().parse_args(argv)
     if getattr(args, "threads", None):
         import numba
+
         numba.set_num_threads(args.threads)
     if args.command == "run":
         return _run(args)
@@ -51,9 +67,10 @@ def main(argv=None):
 
 
 def _run(args):
-    from .parallel.launch import communicator
-    from .plan import build_plan, explain
-    from .scene import load_scene
+    from solver.parallel.launch import communicator
+    from solver.plan import build_plan, explain
+    from solver.scene import load_scene
+
     comm = communicator()
     if comm.size > 1:
         _share_cores_among_ranks(comm, explicit=args.threads)
@@ -72,7 +89,8 @@ def _run(args):
         if comm.is_root():
             print(explain(build_plan(scene), scene))
         return 0
-    from .run import run_scene
+    from solver.run import run_scene
+
     out = args.out or Path("runs") / scene.scene.name
     try:
         result = run_scene(scene, out, comm=comm, quiet=args.quiet)
@@ -81,9 +99,15 @@ def _run(args):
             _fail(f"{exc}\n  outputs written so far are kept in {out}/", 1)
         return 1
     if comm.is_root():
-        print(f"run completed: {result.steps} steps, {result.particles} particles, {result.wall_time:.1f} s wall, "
-              f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s")
-        print(f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, scene.toml, run.json")
+        print(
+            f"run completed: {result.steps} steps, {result.particles} particles, {result.wall_time:.1f} s "
+            "wall, "
+            f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s"
+        )
+        print(
+            f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, "
+            "scene.toml, run.json"
+        )
     return 0
 
 
@@ -92,16 +116,25 @@ def _share_cores_among_ranks(comm, explicit):
     unless --threads or NUMBA_NUM_THREADS says otherwise: ranks x threads above the core
     count made 2 ranks x 2 threads 28x slower than serial on this 2-core machine."""
     import os
+
     import numba
+
     if explicit or "NUMBA_NUM_THREADS" in os.environ:
         return
-    local = next((int(os.environ[k]) for k in ("MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE", "MV2_COMM_WORLD_LOCAL_SIZE")
-                  if os.environ.get(k, "").isdigit()), comm.size)
+    local = next(
+        (
+            int(os.environ[k])
+            for k in ("MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE", "MV2_COMM_WORLD_LOCAL_SIZE")
+            if os.environ.get(k, "").isdigit()
+        ),
+        comm.size,
+    )
     numba.set_num_threads(max(1, min(numba.config.NUMBA_NUM_THREADS, (os.cpu_count() or 1) // max(local, 1))))
 
 
 def _verify(args):
     from verification.registry import run_cases
+
     return run_cases(args.case, args.out, resolution=args.resolution, study=args.study, quiet=args.quiet)
 
 
