@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import tomllib
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Literal, Union
 
@@ -90,9 +91,8 @@ class Soil(Strict):
     cohesion: NonNegative
     dilatancy_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0  # degrees (Drucker-Prager only)
     yield_model: Literal["mohr_coulomb", "drucker_prager", "elastic"] = "mohr_coulomb"
-    bulk_modulus: Positive | None = (
-        None  # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
-    )
+    # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
+    bulk_modulus: Positive | None = None
 
     @property
     def shear_modulus(self):
@@ -152,6 +152,20 @@ class Cfl(Strict):
     collapse_fraction: Positive
 
 
+class Leapfrog(StrEnum):
+    """Time levels of the leap-frog (numerics.leapfrog)."""
+
+    SEED = "seed"  # rho and v at half steps (seed eqs. 24-25)
+    SYMPLECTIC_DENSITY = "symplectic_density"  # rho at whole steps, from v at n+1/2 after the drift
+
+
+class ImagePressure(StrEnum):
+    """What an image particle's pressure (soil: normal stress) is (numerics.image_pressure)."""
+
+    MIRROR = "mirror"  # its source's (seed sec. 2.5)
+    HYDROSTATIC = "hydrostatic"  # its source's plus the static increment between the two points
+
+
 class Numerics(Strict):
     kernel: Literal["cubic_spline"]
     h_over_dx: Annotated[float, Field(ge=1.0, le=2.0)]
@@ -160,8 +174,8 @@ class Numerics(Strict):
     neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
-    leapfrog: Literal["seed", "symplectic_density"] = "seed"
-    image_pressure: Literal["mirror", "hydrostatic"] = "mirror"
+    leapfrog: Leapfrog = Leapfrog.SEED
+    image_pressure: ImagePressure = ImagePressure.MIRROR
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off
@@ -290,7 +304,7 @@ def _check_consistency(s: Scene):
             raise _Inconsistent(
                 "scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)"
             )
-    if s.numerics.leapfrog != "seed" and any(m.model != "water" for m in s.materials.values()):
+    if s.numerics.leapfrog != Leapfrog.SEED and any(m.model != "water" for m in s.materials.values()):
         raise _Inconsistent("numerics.leapfrog", "symplectic_density is implemented for water-only scenes")
     for name in s.numerics.artificial_viscosity:
         if name not in s.materials:

@@ -4,7 +4,8 @@ particle through a wall, kinetic energy decaying to rest, stress within the yiel
 import numpy as np
 import pytest
 
-from solver.physics.soil import yield_excess
+from solver.materials import Phase
+from solver.physics.soil_stress import yield_excess
 from solver.simulation import Simulation
 from verification.column_collapse import run, scene_at
 
@@ -33,7 +34,7 @@ def _run_and_check(sim, t_end, ke_ratio, v0=None):
     assert (x >= sim.lo).all() and (x <= sim.hi).all()  # nothing through a wall
     assert sim.deepest_penetration < 0.5 * sim.scene.scene.spacing  # reflections (if any) stayed shallow
     assert ke[-1] <= ke_ratio * max(ke), (ke[-1], max(ke))  # decays to rest
-    rows = sim.lists[("soil", "soil")].targets
+    rows = sim.ctx.rows[Phase.SOIL]
     assert (
         yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil).max()
         <= 1e-9

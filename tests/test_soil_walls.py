@@ -43,8 +43,8 @@ def test_image_stress_kept_across_no_slip_walls_and_mirrored_across_free_slip():
     ps = sim.particles
     n = ps.n_local
     ps["stress_dev"][:n] = [1.0, 2.0, -3.0, 4.0, 0.0, 0.0]
-    sim.refresh_images(tensors=("stress_dev",))
-    src, sign, _ = sim.walls.tables()
+    sim.refresh(("stress_dev",))
+    src, sign, _ = sim.ctx.image_tables()
     img = ps["stress_dev"][n : n + len(src)]
     floor = (sign[:, 0] > 0) & (sign[:, 1] < 0)
     left = (sign[:, 0] < 0) & (sign[:, 1] > 0)
@@ -58,7 +58,7 @@ def test_image_stress_kept_across_no_slip_walls_and_mirrored_across_free_slip():
     assert np.all(img[corner, 3] == -4.0)  # composition: reversed by the free-slip wall only
     # velocities: no slip v' = -v, free slip reverses the normal component only
     ps["v"][:n] = [0.3, 0.7]
-    sim.refresh_images(vectors=("x", "v"))
+    sim.refresh(("x", "v"))
     v_img = ps["v"][n : n + len(src)]
     np.testing.assert_array_equal(v_img[floor], np.tile([-0.3, -0.7], (floor.sum(), 1)))
     np.testing.assert_array_equal(v_img[left], np.tile([-0.3, 0.7], (left.sum(), 1)))
@@ -221,7 +221,7 @@ def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floo
     normal stresses and shear unchanged (a uniaxial increment along gravity); side-wall images
     (same height) get nothing. Checked against a NumPy evaluation of the same formula and
     against the geostatic column's own vertical stress gradient."""
-    from solver.physics.boundary import add_equilibrium_image_stress
+    from solver.physics.equilibrium_soil_images import add_equilibrium_image_stress
 
     sc = _layer_scene(
         0.0,
@@ -241,7 +241,7 @@ def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floo
     sim.compute_rates()  # mean stress from the geostatic density (eq. 17), mirror images (seed default)
     ps = sim.particles
     n = ps.n_local
-    src, sign, _ = sim.walls.tables()
+    src, sign, _ = sim.ctx.image_tables()
     rows = slice(n, n + len(src))
     sigma_before = ps["stress_dev"][rows, :3] - ps["mean_stress"][rows, None]
     shear_before = ps["stress_dev"][rows, 3].copy()
@@ -268,7 +268,7 @@ def test_equilibrium_image_stress_is_the_geostatic_state_extended_below_the_floo
 def test_equilibrium_image_stress_matches_twin_in_3d_with_tilted_gravity(rng):
     """The kernel against a NumPy twin, sigma' = sigma - rho_src g.(x_img - x_src) g^ g^ with
     sigma = -p I + s, on random 3D states, positions and a gravity not along an axis."""
-    from solver.physics.boundary import add_equilibrium_image_stress
+    from solver.physics.equilibrium_soil_images import add_equilibrium_image_stress
 
     n_src, n_img = 40, 30
     x = rng.uniform(-0.1, 0.1, (n_src + n_img, 3))

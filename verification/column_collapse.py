@@ -164,7 +164,8 @@ def failure_at(series, yq):
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=None):
     """Collapse at dx = H0 / resolution; returns a CaseResult (series: final profile and
     failure line, kinetic energy over time; checks against the experiment)."""
-    from solver.physics.soil import yield_excess
+    from solver.materials import Phase
+    from solver.physics.soil_stress import yield_excess
 
     dx = spacing(resolution)
     scene = scene_at(dx, end_time, overrides)
@@ -185,7 +186,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     ps = sim.particles
     n = ps.n_owned
     x = ps["x"][:n][np.argsort(ps["id"][:n])]
-    rows = sim.lists[("soil", "soil")].targets
+    rows = sim.ctx.rows[Phase.SOIL]
     excess = yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil)
     px, py = surface_profile(x, dx)
     fx, fy = failure_line(x0, x, dx, threshold=max(dx, FAILURE_THRESHOLD))

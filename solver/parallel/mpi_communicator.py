@@ -278,8 +278,8 @@ class MpiCommunicator:
     # -- halo ----------------------------------------------------------------------------
     def build_halo(self, particles, reach, fields):
         """Ghosts: copies of other ranks' particles within `reach` (the Verlet list radius) of
-        this rank's box, with every field any pass reads from neighbours (plus the fields the
-        rebuild itself needs). The send lists are kept for refresh_halo."""
+        this rank's box, with every field any term reads from neighbours (`fields`, from the plan;
+        plus the fields the rebuild itself needs). The send lists are kept for refresh_halo."""
         ps = particles
         t0, c0 = time.perf_counter(), time.process_time()
         ps.n_ghost = ps.n_image = 0
@@ -299,7 +299,7 @@ class MpiCommunicator:
         send_rows = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
         recv_counts = self._alltoall_counts(send_counts)
         names = []
-        wanted = list(ALWAYS_AT_BUILD) + [n for group in fields.values() for n in group]
+        wanted = list(ALWAYS_AT_BUILD) + list(fields)
         for n in wanted:
             if n in ps and n not in names:
                 names.append(n)
