@@ -134,6 +134,9 @@ def test_openfoam_seepage_sheet_pile_tiny(tiny_seepage):
     lines = (tiny_seepage["out"] / "head_lines.csv").read_text().splitlines()
     assert lines[0].startswith("# tool=OpenFOAM v")
     assert lines[1] == "solver,cells_per_T,line,x_m,y_m,head_m_or_gradient,pore_pressure_Pa"
+    field = (tiny_seepage["out"] / "head_field.csv").read_text().splitlines()
+    assert field[1] == "x_m,y_m,head_m,pore_pressure_Pa"
+    assert len(field) == 2 + 121 * 21  # T/20 grid over [-3T, 3T] x [0, T]
 
 
 def test_sheet_pile_closed_form():

@@ -33,7 +33,10 @@ Reduced data (data/, CSV with a provenance header):
 * discharge.csv: solver, cells per T, Q (m2/s), Q/(kH), inflow-outflow imbalance;
 * head_lines.csv: head h and pore pressure u = rho g (h - y) along the base (y = 0), along a
   vertical line just downstream of the pile (x = +T/10) and along the downstream ground
-  surface (exit gradient), on mesh-independent sample points, per mesh and solver.
+  surface (exit gradient), on mesh-independent sample points, per mesh and solver;
+* head_field.csv: the finest Laplace head field on a T/20 grid (initial pore pressure
+  for an SPH run, full-field comparison). Near the pile tip (r^-1/2 gradient) and along
+  the pile (h jumps across it) bilinear interpolation between cell centres is coarse.
 """
 
 from __future__ import annotations
@@ -410,6 +413,7 @@ def run_all(
                 row = [r["solver"], r["cells_per_T"], line, f"{x:.6g}", f"{y:.6g}", f"{h:.9g}", f"{u:.6g}"]
                 w.writerow(row)
 
+    write_head_field(results, geo, out / "head_field.csv", header)
     study = mesh_study(results, geo, q_exact)
     entry_runs = {}
     for r in results:
@@ -455,6 +459,26 @@ def run_all(
                 if _is_time(p.name) and float(p.name) > 0:
                     shutil.rmtree(p)
     return {"results": results, "study": study, "q_exact": q_exact, "factor": factor, "out": out}
+
+
+def write_head_field(results, geo: Geometry, path: Path, header: str) -> None:
+    """The head of the finest Laplace run on a T/20 grid over the whole layer (for an SPH
+    run's initial pore pressure and for full-field comparison)."""
+    lap = [r for r in results if r["solver"] == "laplace" and not r["column"]]
+    if not lap:
+        return
+    best = max(lap, key=lambda r: r["cells_per_T"])
+    step = geo.thickness / 20
+    xs = np.arange(-geo.half_length, geo.half_length + 0.5 * step, step)
+    ys = np.arange(0.0, geo.thickness + 0.5 * step, step)
+    gx, gy = np.meshgrid(xs, ys)
+    h = best["field"].at(gx, gy)
+    with open(path, "w", newline="") as fh:
+        fh.write(header.rstrip("\n") + f"; head field of laplace T/{best['cells_per_T']}, bilinear\n")
+        w = csv.writer(fh)
+        w.writerow(["x_m", "y_m", "head_m", "pore_pressure_Pa"])
+        for x, y, hh in zip(gx.ravel(), gy.ravel(), h.ravel()):
+            w.writerow([f"{x:.6g}", f"{y:.6g}", f"{hh:.9g}", f"{geo.rho_w * geo.g * (hh - y):.6g}"])
 
 
 def save_inputs(results) -> None:
