@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import fcntl
 import json
 import math
 import os
@@ -64,8 +65,8 @@ Y_CROWN = Y_SOIL + FALL
 LX = 0.25  # length of the soil layer [m] (seed sec. 3)
 TOP_MARGIN = 0.04  # air above the nappe's inflow section [m]
 STATIONS = (0.10, 0.15, 0.20)  # velocity profile stations [m]
-END_TIME = 2.0
-AVG_START = 1.0
+END_TIME = 3.0
+AVG_START = 2.0
 WRITE_INTERVAL = 0.25
 EARLY_END = 0.05  # stage 1: the first impact (the lower surface lands at t = sqrt(2 fall / g) = 0.045 s)
 EARLY_WRITE = 0.005
@@ -609,10 +610,13 @@ def run_case(
         "set_up": "docs/scour_setup.md",
     }
     if official:
-        C.update_manifest(MANIFEST, label, entry, top)
-        conv = mesh_comparison(DATA_DIR)
-        if conv:
-            C.set_manifest_section(MANIFEST, "mesh_convergence", conv)
+        # runs of the mesh study may finish concurrently: one writer at a time
+        with open(CASE_DIR / ".manifest.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            C.update_manifest(MANIFEST, label, entry, top)
+            conv = mesh_comparison(DATA_DIR)
+            if conv:
+                C.set_manifest_section(MANIFEST, "mesh_convergence", conv)
     else:
         (out / "manifest.json").write_text(json.dumps({**top, "runs": {label: entry}}, indent=2) + "\n")
     if not keep_fields:
