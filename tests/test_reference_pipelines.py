@@ -18,6 +18,7 @@ import pytest
 from reference_cases.liggghts_column_collapse_2d import calibrate as dem_cal
 from reference_cases.liggghts_column_collapse_2d import run as dem
 from reference_cases.openfoam_dam_break_2d import run as cfd
+from reference_cases.openfoam_overflow_nappe import run as nappe
 
 REQUIRE = os.environ.get("SCOURSPH_REQUIRE_REFERENCE_TOOLS", "") == "1"
 
@@ -84,6 +85,66 @@ def test_openfoam_tiny_two_ranks_match_serial(tiny_dam_break, tmp_path):
     # domain decomposition changes only the linear-solver round-off
     assert np.max(np.abs(a["front"] - b["front"])) < 0.05 * dx
     assert np.max(np.abs(a["wall"] - b["wall"])) < 0.05 * dx
+
+
+# ----------------------------------------------------------------------------- OpenFOAM nappe
+@pytest.fixture(scope="module")
+def tiny_nappe(tmp_path_factory):
+    need("blockMesh", "interFoam", "postProcess")
+    out = tmp_path_factory.mktemp("openfoam_nappe_tiny")
+    return nappe.run_case(q=0.06, tiny=True, out=out, keep_fields=False)
+
+
+@pytest.mark.reference_tools
+def test_openfoam_nappe_tiny_files(tiny_nappe):
+    p = tiny_nappe["paths"]
+    heads = {
+        "nappe": "x_m,upper_m,lower_m,upper_ballistic_m,lower_ballistic_m",
+        "bed": "x_m,p_bed_Pa,depth_m",
+        "velocity": "station_x_m,y_m,alpha_mean,ux_m_s,uy_m_s",
+        "early": "t_s,x_m,upper_m,lower_m,upper_ballistic_m,lower_ballistic_m",
+        "history": "t_s,outflow_m2_s,inflow_m2_s,atmosphere_outflow_m2_s,water_area_m2",
+    }
+    for key, head in heads.items():
+        lines = p[key].read_text().splitlines()
+        assert lines[0].startswith("# tool=OpenFOAM v") and "q=0.06" in lines[0], key
+        assert lines[1] == head, key
+        assert len(lines) > 3, key
+    vel = nappe.read_csv(p["velocity"])
+    assert sorted(set(vel[:, 0])) == list(nappe.STATIONS)
+
+
+@pytest.mark.reference_tools
+def test_openfoam_nappe_tiny_physics(tiny_nappe):
+    q, dx = 0.06, nappe.TINY["dx_mm"] / 1000
+    r = tiny_nappe["entry"]["results"]
+    yc = nappe.critical_depth(q)
+    # the inlet delivers exactly q = u_c y_c (fixed velocity and alpha over the critical depth)
+    vb = r["volume_balance"]
+    assert vb["inflow_mean_m2_s"] == pytest.approx(q, rel=1e-6)
+    # water volume: stored = in - out within 0.5 % of the inflow (measured 0.09 %: the
+    # difference between alpha_face*phi and the MULES flux at the outlet)
+    assert vb["residual_over_inflow_volume"] < 5e-3
+    # first impact: the jet's leading edge moves at u_c and its lowest water falls freely
+    # until it lands (ballistics, see run.early_check); the surfaces are located to a cell
+    first = r["first_impact_vs_ballistic"]
+    assert first["times"] >= 5
+    assert first["front_minus_uc_t_max_abs_m"] < dx
+    assert first["lowest_minus_free_fall_max_abs_m"] < dx
+    # time-averaged bed pressure: its peak lies where the jet lands, between the landing
+    # points of the ballistic lower surface and centre line (plus a cell), and it is
+    # bounded by hydrostatics of the tailwater below and the total head above
+    x_lo = r["ballistic"]["lower_surface_x_m"]
+    x_cl = r["ballistic"]["centre_line_x_m"]
+    assert x_lo - dx <= r["x_bed_pressure_max_m"] <= x_cl + dx
+    e_up = nappe.FALL + 1.5 * yc
+    assert r["bed_pressure_max_Pa"] < nappe.RHO_W * nappe.G * e_up
+    assert r["bed_pressure_max_Pa"] > nappe.RHO_W * nappe.G * 0.5 * yc
+    # the pocket under the nappe floods (drop number q^2/(g fall^3) = 367): in the time
+    # average the jet has no free lower surface over most of its ballistic flight (at most
+    # the column at the wall still holds air by t = 0.6 s)
+    traj = r["steady_upper_surface_vs_ballistic"]
+    assert traj["free_lower_surface_columns"] <= 1 < traj["columns"]
 
 
 # ----------------------------------------------------------------------------- LIGGGHTS
