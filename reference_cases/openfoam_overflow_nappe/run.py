@@ -144,11 +144,19 @@ def case_values(
         "AVG_START": C.fmt(avg_start),
         "EARLY_WRITE": C.fmt(EARLY_WRITE),
         "WRITE_INTERVAL": C.fmt(write_interval),
-        "WRITE_NOW": C.fmt(EARLY_WRITE if stage == 1 else write_interval),
+        "WRITE_NOW": C.fmt(EARLY_WRITE if stage == 1 else stage2_write_interval(end_time, write_interval)),
         "DELTA_T0": C.fmt(min(1e-4, 0.02 * dx)),
         "MAX_CO": C.fmt(MAX_CO),
         "RANKS": ranks,
     }
+
+
+def stage2_write_interval(end_time: float, write_interval: float) -> float:
+    """Write times of a restart count from its start time, so stage 2 writes every
+    (end - EARLY_END)/n with n the nearest whole number of write_interval: the last write,
+    which holds the time averages, falls on end_time."""
+    n = max(1, round((end_time - EARLY_END) / write_interval))
+    return (end_time - EARLY_END) / n
 
 
 def write_case(work: Path, values: dict, only: str | None = None) -> None:
@@ -240,6 +248,9 @@ def reduce_fields(case: Path, q: float, dx: float) -> dict:
     cols = Columns(centres, dx)
     n = len(centres)
     t_last, last = time_dirs(case)[-1]
+    t_end = float(read_function_object(case, "waterVolume")[-1, 0])
+    if abs(t_last - t_end) > 1e-6:
+        raise ValueError(f"{case}: last written time {t_last} is not the end time {t_end}")
     alpha = np.clip(read_internal_field(last / "alpha.waterMean", n), 0.0, 1.0)
     umean = read_internal_field(last / "UMean", n)
     p_bed = read_patch_field(last / "pMean", "bed")
