@@ -71,7 +71,7 @@ def draw_setup(ax) -> None:
     ax.plot([-CROWN_WIDTH, LONG_RUN_LENGTH], [0, 0], "k", lw=2.5)
     ax.plot([SOIL_LENGTH, SOIL_LENGTH], [0, SOIL_DEPTH], "k", lw=2.5)
     ax.axvspan(SOIL_LENGTH, SOIL_LENGTH + 0.03, ymin=0, ymax=1, color="tab:red", alpha=0.08)
-    ax.text(SOIL_LENGTH + 0.004, 0.245, "outlet\nzone", color="tab:red", fontsize=7, va="top")
+    ax.text(SOIL_LENGTH + 0.004, 0.125, "outlet\nzone", color="tab:red", fontsize=7, va="top")
     colours = {0.06: "tab:blue", 0.11: "tab:purple"}
     for q, c in colours.items():
         hy = S.setup_hydraulics(q, FALL)
@@ -108,14 +108,20 @@ def draw_setup(ax) -> None:
         xytext=(-0.01, crown + 0.5 * 0.0716),
         arrowprops={"arrowstyle": "->"},
     )
-    ax.text(0.005, SOIL_DEPTH + 0.002, "fall 0.01 m", fontsize=7)
+    ax.annotate(
+        "fall 0.01 m",
+        xy=(0.002, SOIL_DEPTH + 0.005),
+        xytext=(0.03, SOIL_DEPTH - 0.02),
+        fontsize=7,
+        arrowprops={"arrowstyle": "->", "lw": 0.6},
+    )
     ax.text(0.09, 0.04, "0.25 m x 0.095 m soil (seed)\nparticles 5 mm", fontsize=8)
     ax.set_xlim(-0.14, LONG_RUN_LENGTH + 0.01)
-    ax.set_ylim(-0.01, 0.26)
+    ax.set_ylim(-0.01, 0.29)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m] (landward from the breakwater's landward face)")
     ax.set_ylabel("z [m]")
-    ax.legend(fontsize=6.5, loc="upper right", ncol=2)
+    ax.legend(fontsize=6.5, loc="upper right", ncol=2, framealpha=0.9)
     ax.set_title("(a) set-up, to scale", fontsize=9, loc="left")
 
 

@@ -72,6 +72,8 @@ EARLY_END = 0.05  # stage 1: the first impact (the lower surface lands at t = sq
 EARLY_WRITE = 0.005
 MAX_CO = 0.5
 RHO_W = 1000.0
+STUDY_Q = (0.06, 0.11)  # the seed's smallest and largest unit discharge
+STUDY_DX_MM = (5.0, 10.0 / 3.0, 2.5)  # mesh study: each divides 0.25 m, 0.01 m and 0.04 m
 TINY = {"dx_mm": 5.0, "end_time": 0.6, "avg_start": 0.4, "write_interval": 0.2}
 
 FOAM_ENV = {"WM_PROJECT_DIR": "/usr/share/openfoam"}
