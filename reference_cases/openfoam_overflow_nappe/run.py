@@ -750,6 +750,31 @@ def _compare(s: dict, ref: dict) -> dict:
     return res
 
 
+def summary_table(manifest: Path = MANIFEST) -> str:
+    """Markdown table of the official runs in manifest.json (for the README)."""
+    runs = json.loads(Path(manifest).read_text())["runs"]
+    head = (
+        "| q | dx [mm] | cells | steps | wall [s] | outflow/q | area drift | balance resid. | "
+        "p_bed max [Pa] | x(p max) [m] | depth 0.10 / 0.15 / 0.20 m [mm] | front - u_c t [mm] | "
+        "lowest - free fall [mm] |"
+    )
+    rows = [head, "|" + "---|" * (head.count("|") - 1)]
+    for e in sorted(runs.values(), key=lambda e: (e["q_m2_s"], -e["dx_m"])):
+        r = e["results"]
+        st, vb, fi = r["steadiness"], r["volume_balance"], r["first_impact_vs_ballistic"]
+        depths = " / ".join(f"{1000 * v:.1f}" for v in r["depth_at_stations_m"].values())
+        steps = sum(s["time_steps"] for s in e["solver"].values())
+        rows.append(
+            f"| {e['q_m2_s']} | {1000 * e['dx_m']:.3g} | {e['n_cells']} | {steps} | "
+            f"{e['wall_time_total_s']} | "
+            f"{st['outflow_over_q']:.4f} | {100 * st['water_area_rel_change']:.2f} % | "
+            f"{100 * vb['residual_over_inflow_volume']:.3f} % | {r['bed_pressure_max_Pa']:.0f} | "
+            f"{r['x_bed_pressure_max_m']:.4f} | {depths} | {1000 * fi['front_minus_uc_t_max_abs_m']:.2f} | "
+            f"{1000 * fi['lowest_minus_free_fall_max_abs_m']:.2f} |"
+        )
+    return "\n".join(rows)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--q", type=float, default=0.06, help="unit discharge [m2/s]")
@@ -761,7 +786,13 @@ def main(argv=None) -> int:
     p.add_argument("--avg-start", type=float, default=None)
     p.add_argument("--nice", type=int, default=0, help="raise the niceness of the tool runs")
     p.add_argument("--drop-fields", action="store_true", help="delete the time folders after the reduction")
+    p.add_argument(
+        "--summary", action="store_true", help="print the Markdown table of manifest.json and exit"
+    )
     a = p.parse_args(argv)
+    if a.summary:
+        print(summary_table())
+        return 0
     if a.nice:
         os.nice(a.nice)
     res = run_case(
