@@ -666,6 +666,7 @@ def run_case(
             conv = mesh_comparison(DATA_DIR)
             if conv:
                 C.set_manifest_section(MANIFEST, "mesh_convergence", conv)
+            C.set_manifest_section(MANIFEST, "first_impact_vs_ballistic", first_impact_summary(DATA_DIR))
     else:
         (out / "manifest.json").write_text(json.dumps({**top, "runs": {label: entry}}, indent=2) + "\n")
     if not keep_fields:
@@ -703,6 +704,34 @@ def mesh_comparison(data_dir: Path) -> dict | None:
             pairs[f"dx{dxmm:g}mm_vs_dx{fine:g}mm"] = _compare(s, ref)
         out[f"q{q:.2f}"] = {"finest_dx_mm": fine, "pairs": pairs}
     return out or None
+
+
+def first_impact_summary(data_dir: Path) -> dict:
+    """Per run: the free jet of the first impact against the ballistic jet, from the early
+    CSVs, before the jet lands (t < sqrt(2 fall / g)) and at least two cells behind its
+    leading edge (x <= u_c t - 2 dx), where the blunt head no longer matters."""
+    out = {}
+    land = math.sqrt(2.0 * FALL / G)
+    for p in sorted(Path(data_dir).glob("early_q*_dx*mm.csv")):
+        m = re.fullmatch(r"early_q(\d+p\d+)_dx([\dp]+)mm\.csv", p.name)
+        if not m:
+            continue
+        q = float(m.group(1).replace("p", "."))
+        dx = float(m.group(2).replace("p", ".")) / 1000.0
+        e = read_csv(p)
+        uc = q / critical_depth(q)
+        sel = e[(e[:, 0] < land) & (e[:, 1] <= uc * e[:, 0] - 2.0 * dx)]
+        if len(sel) == 0:
+            continue
+        up, lo = ballistic_surfaces(sel[:, 1], q)
+        out[p.stem[len("early_") :]] = {
+            "points": int(len(sel)),
+            "upper_max_abs_dev_mm": round(1000 * float(np.max(np.abs(sel[:, 2] - up))), 2),
+            "upper_rms_dev_mm": round(1000 * float(np.sqrt(np.mean((sel[:, 2] - up) ** 2))), 2),
+            "lower_max_abs_dev_mm": round(1000 * float(np.max(np.abs(sel[:, 3] - lo))), 2),
+            "lower_rms_dev_mm": round(1000 * float(np.sqrt(np.mean((sel[:, 3] - lo) ** 2))), 2),
+        }
+    return out
 
 
 def _load(data_dir: Path, label: str) -> dict:
