@@ -86,7 +86,7 @@ def draw_setup(ax) -> None:
         bed = finest_cfd(q)
         if bed is not None:
             arr = np.loadtxt(bed, delimiter=",", comments="#", skiprows=2)
-            dxmm = bed.stem.split("_dx")[1]
+            dxmm = bed.stem.split("_dx")[1].replace("p", ".").replace("mm", " mm")
             ax.plot(
                 arr[:, 0],
                 SOIL_DEPTH + arr[:, 2],
