@@ -237,3 +237,47 @@ def test_stability_estimates():
     # Rayleigh time for r = 1.35 mm, E = 5 MPa, nu = 0.3, rho = 2650: about 1.7e-4 s
     assert dem.rayleigh_time(p) == pytest.approx(1.70e-4, rel=0.02)
     assert p.dt / dem.rayleigh_time(p) < 0.2
+
+
+def test_nappe_alpha_crossings():
+    # air / water jet / air pocket / water pool from the top down
+    y = np.arange(10) * 0.01
+    a = np.array([1, 1, 0, 0, 1, 1, 1, 0, 0, 0], float)
+    cr = nappe.alpha_crossings(y, a)
+    assert [s for _, s in cr] == [1, -1, 1]
+    assert [round(v, 6) for v, _ in cr] == [0.065, 0.035, 0.015]
+
+
+def test_nappe_ballistics_and_write_times():
+    q = 0.06
+    yc = nappe.critical_depth(q)
+    up, lo = nappe.ballistic_surfaces(np.array([0.0]), q)
+    assert up[0] == pytest.approx(nappe.Y_CROWN + yc) and lo[0] == pytest.approx(nappe.Y_CROWN)
+    land = nappe.ballistic_impact_x(q)["lower_surface_x_m"]
+    assert nappe.ballistic_surfaces(np.array([land]), q)[1][0] == pytest.approx(nappe.Y_SOIL)
+    # stage 2 restarts at EARLY_END; its last write must fall on the end time
+    for end, w in ((3.0, 0.25), (0.6, 0.2)):
+        dt = nappe.stage2_write_interval(end, w)
+        n = (end - nappe.EARLY_END) / dt
+        assert n == pytest.approx(round(n)) and abs(dt - w) < 0.5 * w
+
+
+def test_nappe_committed_data():
+    # the committed reduction reproduces the manifest's mesh study, and the time-averaged
+    # velocity profiles carry the inflow q (sum alpha u dy; 1 % covers the cell-column
+    # sampling and the 0.1 % residual drift of the averaged flow)
+    import json
+
+    man = json.loads(nappe.MANIFEST.read_text())
+    conv = nappe.mesh_comparison(nappe.DATA_DIR)
+    for q, entry in man["mesh_convergence"].items():
+        for pair, vals in entry["pairs"].items():
+            got = conv[q]["pairs"][pair]
+            assert got["bed_pressure_max_Pa"] == vals["bed_pressure_max_Pa"]
+            assert got["x_bed_pressure_max_m"] == vals["x_bed_pressure_max_m"]
+    for label, run in man["runs"].items():
+        vel = nappe.read_csv(nappe.DATA_DIR / f"velocity_{label}.csv")
+        for xs in nappe.STATIONS:
+            v = vel[vel[:, 0] == xs]
+            flux = float(np.sum(v[:, 2] * v[:, 3] * nappe._dy(v[:, 1])))
+            assert flux == pytest.approx(run["q_m2_s"], rel=0.01), (label, xs)
