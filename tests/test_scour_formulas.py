@@ -127,3 +127,13 @@ def test_every_formula_predicts_deeper_than_the_seed_layer():
     p = S.predictions(np.array([0.06, 0.11]), S.PARTICLE)
     for r in p["formulas"].values():
         assert np.all(r["below_bed"] > 0.095)
+
+
+def test_tailwater_override():
+    # the CFD tailwater (deeper than the loss-free one) lowers H and the predicted depths
+    hy = S.setup_hydraulics(0.06, h_tail=0.0647)
+    assert hy.h_tail == 0.0647 and hy.head_drop == pytest.approx(hy.energy_up - 0.0647)
+    free = S.predictions(np.array([0.06, 0.11]), S.PARTICLE)
+    cfd = S.predictions(np.array([0.06, 0.11]), S.PARTICLE, h_tail=[0.0647, 0.1074])
+    for name in S.FORMULAS:
+        assert np.all(cfd["formulas"][name]["below_bed"] < free["formulas"][name]["below_bed"]), name

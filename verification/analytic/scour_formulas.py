@@ -81,11 +81,15 @@ class SetupHydraulics:
         return self.q / self.h_tail / np.sqrt(G * self.h_tail)
 
 
-def setup_hydraulics(q: float, fall: float = 0.01, g: float = G) -> SetupHydraulics:
+def setup_hydraulics(
+    q: float, fall: float = 0.01, g: float = G, h_tail: float | None = None
+) -> SetupHydraulics:
+    """The hydraulics of the set-up for one q; h_tail overrides the loss-free supercritical
+    tailwater (e.g. with the depth the OpenFOAM reference measures downstream)."""
     yc = float(critical_depth(q, g))
     uc = q / yc
     e_up = fall + 1.5 * yc
-    ht = supercritical_depth(q, e_up, g)
+    ht = supercritical_depth(q, e_up, g) if h_tail is None else float(h_tail)
     return SetupHydraulics(
         q=q,
         fall=fall,
@@ -221,12 +225,14 @@ Q_EXPONENT = {
 }
 
 
-def predictions(q_values, grains: Grains = SAND, fall: float = 0.01) -> dict:
+def predictions(q_values, grains: Grains = SAND, fall: float = 0.01, h_tail=None) -> dict:
     """Every formula at every q of the set-up: D (from the tailwater level), the depth
     below the original bed, and the effective exponent of q of that depth in our set-up
-    (a log-log fit over q_values: here H and h grow with q too)."""
+    (a log-log fit over q_values: here H and h grow with q too). h_tail: one tailwater
+    depth per q instead of the loss-free one."""
     q_values = np.asarray(q_values, float)
-    hyd = [setup_hydraulics(float(q), fall) for q in q_values]
+    tails = [None] * len(q_values) if h_tail is None else [float(h) for h in h_tail]
+    hyd = [setup_hydraulics(float(q), fall, h_tail=h) for q, h in zip(q_values, tails)]
     out = {"q": q_values, "hydraulics": hyd, "grains": grains, "formulas": {}}
     h = np.array([hy.h_tail for hy in hyd])
     for name, f in FORMULAS.items():
@@ -264,6 +270,12 @@ if __name__ == "__main__":
             f"q={hy.q:.2f}: y_c={hy.y_c:.4f} u_c={hy.u_c:.3f} h_t={hy.h_tail:.4f} "
             f"Fr_t={hy.froude_tail:.2f} H={hy.head_drop:.4f} v_imp={hy.impact_speed:.3f}"
         )
+    # the tailwater the OpenFOAM reference measures at x = 0.20 m (2.5 mm mesh), for comparison
+    cfd = {"q": np.array([0.06, 0.11]), "h": np.array([0.0647, 0.1074])}
+    for gr in (SAND, PARTICLE):
+        p = predictions(cfd["q"], gr, h_tail=cfd["h"])
+        print(f"\n{gr.label}, CFD tailwater {cfd['h']} m:")
+        print(table(p))
     for gr in (SAND, PARTICLE):
         p = predictions(qs, gr)
         print(
