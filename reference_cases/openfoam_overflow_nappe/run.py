@@ -10,22 +10,28 @@ surface y = 0.095 m, from the breakwater's vertical landward face x = 0 to the e
 soil layer x = 0.25 m. The nappe enters horizontally through x = 0 between the crown
 y = 0.105 m (0.01 m above the soil: the seed's fall height) and the crown plus the critical
 depth y_c = (q^2/g)^(1/3), with the uniform speed u_c = q / y_c and alpha = 1. Outlet at
-x = 0.25 m (zero gradient: the flow there is supercritical, see the README); atmosphere
+x = 0.25 m (zero gradient; the flow there is near critical, see the README); atmosphere
 (total pressure 0) on top and above the nappe at x = 0. Water 1000 kg/m3, nu = 1e-6
 m2/s; air 1 kg/m3, nu = 1.48e-5 m2/s; sigma = 0.07 N/m; laminar (why: README).
 
 Steps: the dictionaries in case/ are copied into work/<run>/ with the numbers filled in,
-then blockMesh, [decomposePar], interFoam, [reconstructPar], postProcess -func
-writeCellCentres, and the last time folder's time averages (fieldAverage over
-[avg_start, end]) are reduced to
+then blockMesh, [decomposePar], interFoam stage 1 (0 to 0.05 s, written every 5 ms: the
+first impact), interFoam stage 2 (restart to the end time), [reconstructPar],
+postProcess -func writeCellCentres. The last time folder's time averages (fieldAverage
+over [avg_start, end]) and the stage-1 fields are reduced to
 
-* nappe_<run>.csv: upper and lower alpha = 0.5 surfaces of the averaged nappe per cell
-  column, before impact, with the ballistic surfaces of a jet leaving at critical depth;
+* nappe_<run>.csv: upper and lower alpha = 0.5 surfaces of the averaged flow per cell
+  column (lower NaN where no air is under the jet), with the ballistic surfaces of a jet
+  leaving the crown at critical depth;
 * bed_<run>.csv: time-averaged bed pressure (gauge, on the bed faces) and the
   volume-equivalent water depth sum(alpha dy) along the bed;
 * velocity_<run>.csv: time-averaged alpha and velocity profiles at x = 0.10, 0.15, 0.20 m;
-* history_<run>.csv: outlet water discharge and water area per unit width (every 0.01 s),
-  which show when the flow has become quasi-steady.
+* early_<run>.csv: the jet's instantaneous surfaces per column every 5 ms to 0.05 s;
+* history_<run>.csv: water discharge through the outlet, inlet and atmosphere and the
+  water area per unit width (every 0.01 s), which show when the flow is quasi-steady;
+
+and manifest.json gets the run's record (steadiness, volume balance, first impact against
+ballistics, bed-pressure peak) and, for official runs, the mesh study.
 """
 
 from __future__ import annotations
