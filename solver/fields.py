@@ -28,3 +28,11 @@ def kinematics(dim: int) -> dict[str, FieldSpec]:
 
 RHO_HALF = FieldSpec(0, np.float64, "leap-frog density at n+1/2 (eq. 24)")
 PRESSURE = FieldSpec(0, np.float64, "pressure, Tait EOS (eq. 9)", Mirror.SCALAR)
+WATER_FRACTION = FieldSpec(
+    0,
+    np.float64,
+    "water volume fraction at creation: 1 free water, n pore water (EOS reference n rho0)",
+    Mirror.SCALAR,
+    constant=True,
+    default=1.0,
+)

@@ -42,3 +42,11 @@ def block_top(block) -> float:
     if isinstance(block, RectangleBlock):
         return float(block.max[-1])
     return float(np.max(np.asarray(block.vertices)[:, -1]))
+
+
+def block_span(block) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners of a block's bounding box."""
+    if isinstance(block, RectangleBlock):
+        return np.asarray(block.min, float), np.asarray(block.max, float)
+    verts = np.asarray(block.vertices, float)
+    return verts.min(axis=0), verts.max(axis=0)

@@ -93,6 +93,10 @@ class Soil(Strict):
     yield_model: Literal["mohr_coulomb", "drucker_prager", "elastic"] = "mohr_coulomb"
     # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
     bulk_modulus: Positive | None = None
+    # water-soil coupling (seed eq. 18), required when the scene has water (the seed gives neither):
+    # porosity n (then `density` is the dry density (1 - n) rho_grain) and hydraulic conductivity k
+    porosity: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+    permeability: Positive | None = None  # m/s
 
     @property
     def shear_modulus(self):
@@ -125,6 +129,9 @@ class RectangleBlock(Strict):
     hydrostatic: bool = False
     geostatic: bool = False  # soil: start at sigma_v = rho g depth, sigma_h = K0 sigma_v
     fixed: bool = False  # wall particles: never moved, contribute to neighbour sums
+    saturated: bool = False  # soil: pore-water particles fill the block (docs/seepage.md)
+    water_table: float | None = None  # saturated: level of the free water surface (default: see docs)
+    pore_water: str | None = None  # saturated: the water material (default: the scene's only one)
 
 
 class PolygonBlock(Strict):
@@ -135,6 +142,9 @@ class PolygonBlock(Strict):
     hydrostatic: bool = False
     geostatic: bool = False
     fixed: bool = False
+    saturated: bool = False
+    water_table: float | None = None
+    pore_water: str | None = None
 
 
 Block = Annotated[Union[RectangleBlock, PolygonBlock], Field(discriminator="shape")]
@@ -149,6 +159,7 @@ class Cfl(Strict):
     sound: Positive
     force: Positive
     viscous: Positive
+    drag: Positive = 1.0  # dt <= drag / lambda_max of the seepage drag (docs/seepage.md)
     collapse_fraction: Positive
 
 
@@ -166,6 +177,13 @@ class ImagePressure(StrEnum):
     HYDROSTATIC = "hydrostatic"  # its source's plus the static increment between the two points
 
 
+class Seepage(StrEnum):
+    """The water-soil coupling (numerics.seepage; docs/seepage.md)."""
+
+    MIXTURE = "mixture"  # drag n^2 gamma_w dv / k plus the pore pressure on the skeleton (Bui & Nguyen 2017)
+    SEED = "seed"  # the seed's eqs. (18), (20), (21): the seepage force only
+
+
 class Numerics(Strict):
     kernel: Literal["cubic_spline"]
     h_over_dx: Annotated[float, Field(ge=1.0, le=2.0)]
@@ -176,6 +194,7 @@ class Numerics(Strict):
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
     leapfrog: Leapfrog = Leapfrog.SEED
     image_pressure: ImagePressure = ImagePressure.MIRROR
+    seepage: Seepage = Seepage.MIXTURE
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off
@@ -312,6 +331,40 @@ def _check_consistency(s: Scene):
     times = s.output_times()
     if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
+    _check_seepage(s)
+
+
+def _check_seepage(s: Scene):
+    """Water that can reach soil needs the soil's n and k; saturated blocks need pore water."""
+    waters = [name for name, m in s.materials.items() if isinstance(m, Water)]
+    if waters:
+        for name, mat in s.materials.items():
+            if isinstance(mat, Soil):
+                for key in ("porosity", "permeability"):
+                    if getattr(mat, key) is None:
+                        raise _Inconsistent(
+                            f"materials.{name}.{key}",
+                            "required when the scene has water (seepage force, seed eq. 18); the seed gives "
+                            "no value: choose one with a source (docs/seepage.md)",
+                        )
+    for k, block in enumerate(s.blocks):
+        key = f"blocks[{k}]"
+        if not block.saturated:
+            for extra in ("water_table", "pore_water"):
+                if getattr(block, extra) is not None:
+                    raise _Inconsistent(
+                        f"{key}.{extra}", "only for a saturated soil block (saturated = true)"
+                    )
+            continue
+        if not isinstance(s.materials.get(block.material), Soil):
+            raise _Inconsistent(f"{key}.saturated", "only soil blocks can be saturated")
+        if block.pore_water is None and len(waters) != 1:
+            reason = (
+                "needs a water material in the scene" if not waters else f"choose one of {', '.join(waters)}"
+            )
+            raise _Inconsistent(f"{key}.pore_water", f"a saturated block {reason}")
+        if block.pore_water is not None and block.pore_water not in waters:
+            raise _Inconsistent(f"{key}.pore_water", f"'{block.pore_water}' is not a water material")
 
 
 def deep_merge(base: dict, over: dict) -> dict:

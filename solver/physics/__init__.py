@@ -12,6 +12,7 @@ from .fluid_rates import FluidRates
 from .frictional_walls import FrictionalWalls
 from .gravity import Gravity
 from .hydrostatic_image_pressure import HydrostaticImagePressure
+from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .symplectic_continuity import SymplecticContinuity
@@ -24,6 +25,7 @@ TERMS = (
     Gravity,
     TaitEquationOfState,
     HydrostaticImagePressure,
+    PorePressureAtSoil,
     SoilStressState,
     ArtificialStress,
     EquilibriumSoilImages,
@@ -31,6 +33,8 @@ TERMS = (
     ViscousStress,
     FluidRates,
     SoilRates,
+    SeepageOnSoil,
+    SeepageOnWater,
     FixedParticles,
     SoilReturnMapping,
     SymplecticContinuity,

@@ -23,6 +23,7 @@ from ..materials import Phase
 from ..particles import FieldSpec
 from ..scene import Leapfrog
 from ..term import Equation, Integrated, Stage, Term
+from .tait_eos import saturated_mixture
 from .viscous_stress import viscous_stress_on
 
 
@@ -35,8 +36,15 @@ def fluid_rates(
     xsph=None, xsph_eps=0.0,       # XSPH velocity correction out: eq. (22)
     is3d=None,                     # None in 2D: every z term is pruned at compile time
     mixed=None,                    # None when the phase has one material: no per-pair look-ups
+    apparent=None,                 # not None: the density-jump forms (pore water, docs/seepage.md)
 ):  # fmt: skip
-    """Continuity (6) and momentum (7) for each target; adds into drho and acc."""
+    """Continuity (6) and momentum (7) for each target; adds into drho and acc.
+
+    With `apparent` (water of apparent density n rho_w in pores next to free water), the forms that
+    stay consistent across a jump of density at a continuous pressure (Colagrossi & Landrini 2003):
+    drho_i = rho_i sum_j V_j v_ij . grad W and -sum_j m_j (p_i + p_j) / (rho_i rho_j) grad W (and
+    the same for tau), instead of eqs. (6)-(7), whose m_j p_i / rho_i^2 weighs a neighbour of
+    another density wrongly."""
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
@@ -73,8 +81,14 @@ def fluid_rates(
             rho_j = rho[j]
             rj2 = 1.0 / (rho_j * rho_j)
             if drho is not None:
-                d_rho += m_j * vr * fr  # eq. (6)
-            coef = -(pi_r2 + p[j] * rj2)  # eq. (7): sigma = -p delta
+                if apparent is not None:
+                    d_rho += m_j / rho_j * vr * fr  # times rho_i after the loop
+                else:
+                    d_rho += m_j * vr * fr  # eq. (6)
+            if apparent is not None:
+                coef = -(p[i] + p[j]) / (rho_i * rho_j)
+            else:
+                coef = -(pi_r2 + p[j] * rj2)  # eq. (7): sigma = -p delta
             if av_alpha is not None:  # eq. (19), branch-free: zero unless vr < 0
                 if mixed is not None:  # pair means of c, alpha, beta
                     mj = material[j]
@@ -89,13 +103,16 @@ def fluid_rates(
             a2 += coef * d2
             if tau is not None:  # eq. (7): + (tau_i/rho_i^2 + tau_j/rho_j^2) . grad W
                 fm = m_j * fr
-                s00 = tau[i, 0] * ri2 + tau[j, 0] * rj2
-                s11 = tau[i, 1] * ri2 + tau[j, 1] * rj2
-                s01 = tau[i, 3] * ri2 + tau[j, 3] * rj2
+                wi, wj = ri2, rj2
+                if apparent is not None:
+                    wi = wj = 1.0 / (rho_i * rho_j)
+                s00 = tau[i, 0] * wi + tau[j, 0] * wj
+                s11 = tau[i, 1] * wi + tau[j, 1] * wj
+                s01 = tau[i, 3] * wi + tau[j, 3] * wj
                 if is3d is not None:
-                    s22 = tau[i, 2] * ri2 + tau[j, 2] * rj2
-                    s12 = tau[i, 4] * ri2 + tau[j, 4] * rj2
-                    s02 = tau[i, 5] * ri2 + tau[j, 5] * rj2
+                    s22 = tau[i, 2] * wi + tau[j, 2] * wj
+                    s12 = tau[i, 4] * wi + tau[j, 4] * wj
+                    s02 = tau[i, 5] * wi + tau[j, 5] * wj
                     a0 += fm * (s00 * d0 + s01 * d1 + s02 * d2)
                     a1 += fm * (s01 * d0 + s11 * d1 + s12 * d2)
                     a2 += fm * (s02 * d0 + s12 * d1 + s22 * d2)
@@ -108,6 +125,8 @@ def fluid_rates(
                 x1 -= w * u1
                 x2 -= w * u2
         if drho is not None:
+            if apparent is not None:
+                d_rho *= rho_i
             drho[i] += d_rho
         acc[i, 0] += a0
         acc[i, 1] += a1
@@ -145,6 +164,7 @@ class FluidRates(Term):
         self.av_beta = materials.av_beta if av else None
         self.xsph_eps = num.xsph_epsilon
         self.mixed = True if len(water) > 1 else None  # per-pair material look-ups only if needed
+        self.apparent = True if saturated_mixture(scene) else None  # pore water next to free water
         self.reads = (
             ("x", "v", "rho", "p", "mass")
             + (("tau",) if self.viscous else ())
@@ -172,25 +192,8 @@ class FluidRates(Term):
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
         fluid_rates(
-            nl.targets,
-            nl.start,
-            nl.index,
-            ps["x"],
-            ps["v"],
-            ps["rho"],
-            ps["p"],
-            ps["mass"],
-            ps["material"],
-            self.sound_speed,
-            ctx.h,
-            ctx.norm,
-            ps["drho"] if self.continuity else None,
-            ps["acc"],
-            ps["tau"] if self.viscous else None,
-            self.av_alpha,
-            self.av_beta,
-            ps["xsph"] if self.xsph_eps > 0 else None,
-            self.xsph_eps,
-            ctx.is3d,
-            self.mixed,
-        )
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"], ps["material"],
+            self.sound_speed, ctx.h, ctx.norm, ps["drho"] if self.continuity else None, ps["acc"],
+            ps["tau"] if self.viscous else None, self.av_alpha, self.av_beta,
+            ps["xsph"] if self.xsph_eps > 0 else None, self.xsph_eps, ctx.is3d, self.mixed, self.apparent,
+        )  # fmt: skip
