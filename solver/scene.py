@@ -489,9 +489,9 @@ def _fill_material_defaults(merged: dict) -> dict:
     merged = copy.deepcopy(merged)
     materials = merged.get("materials")
     numerics = merged.get("numerics")
-    if not isinstance(materials, dict) or not isinstance(numerics, dict):
+    if not isinstance(materials, dict):
         return merged
-    av = numerics.setdefault("artificial_viscosity", {})
+    av = numerics.setdefault("artificial_viscosity", {}) if isinstance(numerics, dict) else None
     mat_defaults = merged.get("material_defaults")
     av_defaults = merged.get("artificial_viscosity_defaults")
     for name, mat in materials.items():
