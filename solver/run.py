@@ -99,12 +99,12 @@ def run_metadata(scene: Scene, comm, threads):
     }
 
 
-def check_out_dir(out_dir, overwrite, comm):
-    """RunDirError on every rank if the root may not write to out_dir (writes nothing)."""
+def _on_root(action, out_dir, comm):
+    """action() on the root rank; its RunDirError raised on every rank (no rank left waiting)."""
     reason = None
     if comm.is_root():
         try:
-            check(out_dir, "overwrite" if overwrite else "new")
+            action()
         except RunDirError as exc:
             reason = exc.reason
     reason = comm.bcast(reason)
@@ -117,15 +117,17 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True, overwri
     if it is not empty and not an earlier run, or is an earlier run and not `overwrite`)."""
     comm = comm or SerialCommunicator()
     out_dir = Path(out_dir)
-    if write:
-        check_out_dir(out_dir, overwrite, comm)
+    mode = "overwrite" if overwrite else "new"
+    if write:  # refused before any work: writes nothing
+        _on_root(lambda: check(out_dir, mode), out_dir, comm)
     sim = Simulation(scene, comm=comm)
+    if write:
+        _on_root(lambda: claim(out_dir, scene.scene.name, mode), out_dir, comm)
     threads = numba.get_num_threads()
     writers = []
     names = requested_fields(scene, sim.particles)
     arrays = [OUTPUT_TO_ARRAY[n] for n in names if n != "rank"]
     if write and comm.is_root():
-        claim(out_dir, scene.scene.name, "overwrite" if overwrite else "new")
         scene_text = scene_to_toml(scene)
         atomic_write_text(out_dir / "scene.toml", scene_text)
         meta = run_metadata(scene, comm, threads)

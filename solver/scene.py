@@ -437,7 +437,7 @@ def estimated_dt(s: Scene):
     cfl = s.numerics.cfl
     c = max(m.sound_speed for m in s.materials.values())
     limits = [(cfl.sound * h / c, "sound speed")]
-    g = math.sqrt(sum(x * x for x in s.scene.gravity))
+    g = math.hypot(*s.scene.gravity)  # no overflow for huge components
     if g > 0:
         limits.append((cfl.force * math.sqrt(h / g), "gravity"))
     nu = max((m.viscosity / m.density for m in s.materials.values() if isinstance(m, Water)), default=0.0)
@@ -456,14 +456,14 @@ def _check_resources(s: Scene):
             "scene.spacing", f"the blocks would hold about {n:.3g} particles, more than {MAX_PARTICLES:.0e}"
         )
     extent = np.array(s.domain.max) - np.array(s.domain.min)
-    cells = float(np.prod(np.ceil(extent / (2.0 * s.h)) + 2))
+    cells = math.prod(math.ceil(e / (2.0 * s.h)) + 2.0 for e in extent.tolist())  # python floats: inf, no warning
     if cells > MAX_CELLS:
         raise _Inconsistent(
             "domain",
             f"spans {cells:.3g} neighbour cells of size 2h, more than {MAX_CELLS:.0e}: is it too large?",
         )
     dt, limit = estimated_dt(s)
-    steps = (s.scene.end_time + s.numerics.settling_time) / dt
+    steps = (s.scene.end_time + s.numerics.settling_time) / dt if dt > 0 else math.inf
     if not steps <= MAX_STEPS:
         raise _Inconsistent(
             "scene.end_time",

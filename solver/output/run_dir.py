@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import os
 import re
 from pathlib import Path
 
@@ -65,9 +66,16 @@ def check(out_dir, mode="new") -> None:
             raise RunDirError(path, "no such run directory to continue")
         if path.is_symlink():
             raise RunDirError(path, "is a dangling symbolic link")
+        parent = next(p for p in path.absolute().parents if p.exists())
+        if not parent.is_dir():
+            raise RunDirError(path, f"cannot be created: {parent} is not a directory")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise RunDirError(path, f"cannot be created: {parent} is not writable")
         return
     if not path.is_dir():
         raise RunDirError(path, "exists and is not a directory")
+    if not os.access(path, os.R_OK | os.W_OK | os.X_OK):
+        raise RunDirError(path, "is not writable")
     if not any(path.iterdir()):
         if mode == "continue":
             raise RunDirError(path, "is empty: no run to continue")
@@ -123,9 +131,12 @@ def claim(out_dir, scene_name, mode="new") -> Path:
     run's own files ("overwrite"; "continue" keeps them) and write the marker."""
     check(out_dir, mode)
     path = Path(out_dir)
-    path.mkdir(parents=True, exist_ok=True)
-    if mode == "overwrite" and read_marker(path) is not None:
-        clear(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        if mode == "overwrite" and read_marker(path) is not None:
+            clear(path)
+    except OSError as exc:
+        raise RunDirError(path, f"cannot be prepared: {exc.strerror or exc}") from None
     marker = {
         "solver": "ScourSPH",
         "version": __version__,
@@ -133,5 +144,8 @@ def claim(out_dir, scene_name, mode="new") -> Path:
         "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "mode": mode,
     }
-    atomic_write_text(path / MARKER, json.dumps(marker, indent=2) + "\n")
+    try:
+        atomic_write_text(path / MARKER, json.dumps(marker, indent=2) + "\n")
+    except OSError as exc:
+        raise RunDirError(path, f"cannot be written: {exc.strerror or exc}") from None
     return path
