@@ -456,7 +456,8 @@ def _check_resources(s: Scene):
             "scene.spacing", f"the blocks would hold about {n:.3g} particles, more than {MAX_PARTICLES:.0e}"
         )
     extent = np.array(s.domain.max) - np.array(s.domain.min)
-    cells = math.prod(math.ceil(e / (2.0 * s.h)) + 2.0 for e in extent.tolist())  # python floats: inf, no warning
+    with np.errstate(over="ignore"):  # a far too large domain overflows to inf, which is refused
+        cells = float(np.prod(np.ceil(extent / (2.0 * s.h)) + 2.0))
     if cells > MAX_CELLS:
         raise _Inconsistent(
             "domain",
@@ -530,6 +531,8 @@ def _reason(err) -> str:
         return "unknown key (not in the scene schema)"
     if kind == "missing":
         return "missing value"
+    if kind == "value_error" and err.get("ctx", {}).get("error") is not None:
+        return str(err["ctx"]["error"])  # our own reason, without pydantic's "Value error, " prefix
     return err["msg"]
 
 
