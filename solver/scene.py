@@ -396,6 +396,11 @@ def _check_consistency(s: Scene):
     for name in s.numerics.artificial_viscosity:
         if name not in s.materials:
             raise _Inconsistent(f"numerics.artificial_viscosity.{name}", "no material of that name")
+    if "pressure" in s.output.fields and not any(isinstance(m, Water) for m in s.materials.values()):
+        raise _Inconsistent(
+            "output.fields",
+            "'pressure' is the water pressure (Tait EOS), and this scene has no water material",
+        )
     field = s.output.render_field
     if field not in RENDER_FIELDS:
         raise _Inconsistent(

@@ -273,6 +273,12 @@ REFUSED = {
         "output.render_field",
         "needs 'pressure'",
     ),
+    "pressure of a soil-only scene": (
+        COLLAPSE,
+        lambda t: edit(t, 'fields = ["velocity", "density"]', 'fields = ["velocity", "pressure"]'),
+        "output.fields",
+        "no water",
+    ),
     "artificial_stress without soil": (
         GOOD,
         lambda t: edit(t, "[[blocks]]", "[numerics]\nartificial_stress = 0.5\n\n[[blocks]]"),
