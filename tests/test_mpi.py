@@ -31,7 +31,14 @@ STEPS = 300
 OVERRIDES = [f"scene.spacing={SPACING!r}", "parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0"]
 TIMEOUT = 120
 
+# CI sets SCOURSPH_REQUIRE_MPI=1 (.ci/run): there a missing mpirun fails the suite instead of
+# skipping the MPI tests, so the parallel code cannot silently go untested.
+REQUIRE_MPI = os.environ.get("SCOURSPH_REQUIRE_MPI", "") == "1"
 if not MPIRUN.exists():
+    if REQUIRE_MPI:
+        pytest.fail(
+            f"no mpirun at {MPIRUN}, and SCOURSPH_REQUIRE_MPI=1 makes the MPI tests mandatory", pytrace=False
+        )
     pytest.skip("no mpirun in the venv (pip install mpich)", allow_module_level=True)
 
 
@@ -445,3 +452,17 @@ def test_mpi_3d_soil_equals_serial(tmp_path):
             ("art_stress", np.abs(m["art_stress"] - s["art_stress"]).max(), 0.5 * rho0 * c * tol_v / rho0**2),
         ):  # R = -eps sigma+ / rho^2, eps = 0.5
             assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g} (ranks = {ranks})"
+
+
+def test_output_directory_refusal_ends_every_rank(tmp_path):
+    """A refused output directory (not empty, not a ScourSPH run) is decided on the root and
+    shared: both ranks exit 2 at once with one message, nothing is written, no rank waits."""
+    (tmp_path / "mine.txt").write_text("a user's file")
+    r = _run(
+        [str(BIN / "scoursph"), "run", str(SCENE), "--out", str(tmp_path), "--quiet", "--threads", "1",
+         "--set", "scene.spacing=0.005715", "--set", "scene.end_time=0.002"],
+        ranks=2, timeout=60,
+    )  # fmt: skip
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert r.stderr.count("not a ScourSPH run directory") == 1, r.stderr[-2000:]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
