@@ -10,6 +10,16 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked `nightly` run only with SCOURSPH_NIGHTLY=1 (make test stays short)."""
+    if os.environ.get("SCOURSPH_NIGHTLY") == "1":
+        return
+    skip = pytest.mark.skip(reason="nightly only: set SCOURSPH_NIGHTLY=1")
+    for item in items:
+        if item.get_closest_marker("nightly") is not None:
+            item.add_marker(skip)
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
