@@ -276,6 +276,29 @@ def test_exception_on_one_rank_aborts_all(tmp_path, how):
     assert "injected failure on rank 1" in r.stderr and "error on rank 1 of 2" in r.stderr, r.stderr[-2000:]
 
 
+def test_failure_message_survives_a_stalled_launcher(tmp_path):
+    """The failing rank's message must reach the user whenever the launcher gets to read it:
+    rank 1 stops hydra's proxy (SIGSTOP, resumed 1 s later, as a descheduled node would) and
+    then fails. Before issue 14 the abort waited a fixed 0.2 s for the launcher; now it waits
+    until the launcher has taken the bytes from the pipe (mpi_communicator._hand_output_to_launcher)."""
+    script = tmp_path / "stall.py"
+    script.write_text(
+        "import os, signal, subprocess\n"
+        "from solver.parallel.launch import communicator\n"
+        "comm = communicator()\n"
+        "if comm.rank == 1:\n"
+        "    proxy = os.getppid()\n"
+        "    subprocess.Popen(['sh', '-c', f'sleep 1; kill -CONT {proxy}'])\n"
+        "    os.kill(proxy, signal.SIGSTOP)\n"
+        "    raise ValueError('injected failure on rank 1')\n"
+        "comm.max(1.0)\n"
+        "comm.barrier()\n"
+    )
+    r = _run([sys.executable, str(script)], ranks=2, timeout=60)
+    assert r.returncode != 0, (r.returncode, r.stderr[-2000:])
+    assert "injected failure on rank 1" in r.stderr and "error on rank 1 of 2" in r.stderr, r.stderr[-2000:]
+
+
 # A rank killed outright (kill -9: no Python code runs, no MPI_Abort) must end the job. Nothing
 # in ScourSPH waits for a dead peer with a timeout: the launcher (hydra, the mpich wheel's
 # mpirun) sees the rank's death at once (SIGCHLD, and EOF on its PMI socket and output pipes),
