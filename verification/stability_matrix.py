@@ -390,9 +390,9 @@ def _row(r):
     }
 
 
-def write_table(results, out=OUT, stem="matrix", header=""):
+def write_table(results, out=OUT, stem="matrix", header="", rows=None):
     out.mkdir(parents=True, exist_ok=True)
-    rows = [_row(r) for r in results]
+    rows = rows if rows is not None else [_row(r) for r in results]
     with open(out / f"{stem}.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, FIELDS)
         w.writeheader()
@@ -421,7 +421,23 @@ def main(argv=None):
     ap.add_argument("--only", action="append", default=[], help="cells whose name contains this (repeatable)")
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--stem", default="matrix")
+    ap.add_argument(
+        "--merge",
+        nargs="+",
+        type=Path,
+        help="only merge these CSV tables (runs split over processes) into --out",
+    )
     args = ap.parse_args(argv)
+    if args.merge:
+        rows = {}
+        for path in args.merge:
+            with open(path, newline="") as fh:
+                rows.update({r["name"]: r for r in csv.DictReader(fh)})
+        order = {c.name: estimated_cost(c) for c in cells()}
+        write_table(
+            [], args.out, args.stem, rows=sorted(rows.values(), key=lambda r: order.get(r["name"], 0.0))
+        )
+        return 0
     chosen = [
         c for c in cells() if (not args.ci or c.ci) and (not args.only or any(s in c.name for s in args.only))
     ]
