@@ -21,7 +21,7 @@ weak, and the module says where:
     order p; Roache 1998 three-grid GCI, Celik et al. 2008). The difference to the finest run,
     used before, is a lower bound of that error for a monotone sequence, not an upper one (with
     it the 5 and 4 mm runouts failed). Caveat: while the experiment lies between R(dx) and R_0,
-    as it does at all three spacings, this check cannot fail; the discriminating statement is
+    as it did at all three spacings before issue 14, this check cannot fail; the discriminating statement is
     R_0 against the experiment (+16 mm, +3.5 %), reported as a note, since the uncertainty of
     R_0 itself is not estimated (the refinement ratio 5 -> 4 mm, 1.25, is below the 1.3 Celik
     et al. recommend). When the three runouts are not monotone (oscillatory convergence, as since
