@@ -276,11 +276,12 @@ def test_exception_on_one_rank_aborts_all(tmp_path, how):
     assert "injected failure on rank 1" in r.stderr and "error on rank 1 of 2" in r.stderr, r.stderr[-2000:]
 
 
-def test_mpi_symplectic_density_equals_serial(tmp_path):
-    """numerics.leapfrog = "symplectic_density" adds a post-drift continuity pass with its own
-    halo refresh (x, v_half): 2 ranks still give the serial state within the same round-off
-    bounds (derived in roundoff_tolerances)."""
-    extra = ('numerics.leapfrog="symplectic_density"',)
+def test_mpi_seed_scheme_equals_serial(tmp_path):
+    """numerics.scheme = "seed" (half-step leap-frog, mirror images, no diffusion, no repulsion):
+    2 ranks give the serial state within the same round-off bounds (derived in
+    roundoff_tolerances); the default scheme (midpoint continuity with x_prev exchanged like x,
+    density diffusion, hydrostatic images, wall repulsion) is the other tests' scheme."""
+    extra = ('numerics.scheme="seed"',)
     (tmp_path / "s").mkdir()
     (tmp_path / "m").mkdir()
     s, s_stats = _driver(tmp_path / "s", 1, extra)

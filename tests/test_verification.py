@@ -21,62 +21,53 @@ def test_still_water_stays_hydrostatic(tmp_path):
     assert not failed, "\n".join(failed)
 
 
+@pytest.fixture(scope="module")
+def fine_still_water_seed():
+    return hydrostatic.run(40, **hydrostatic.SEED)
+
+
+@pytest.fixture(scope="module")
+def fine_still_water_default():
+    return hydrostatic.run(40)
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect: with the seed's alpha = 0.01 an acoustic mode grows "
-    "exponentially in still water at H/40 after ~0.25 s (alpha = 0.1 is stable): the seed's half-step "
-    "leap-frog "
-    "is not symplectic (verification/leapfrog_stability.py); kept visible until fixed",
-)
-def test_still_water_stays_quiet_at_fine_resolution():
-    res = hydrostatic.run(40)
+def test_seed_scheme_grows_an_acoustic_mode_in_fine_still_water(fine_still_water_seed):
+    """Known defect of the seed's scheme, pinned (it was a strict xfail): with alpha = 0.01 the
+    half-step leap-frog is not neutral (verification/leapfrog_stability.py) and an acoustic mode
+    grows in still water at H/40 after ~0.25 s. Measured (hydrostatic_study.md): spurious Mach
+    0.0103 at 0.5 s, per-particle pressure noise 1.41 rho0 g H. Pinned as: the Mach number passes
+    the case's 0.01 tolerance, and the noise exceeds 0.5 rho0 g H (the defaults: 0.003)."""
+    res = fine_still_water_seed
+    assert res.series["mach"].max() > 0.01
+    assert res.series["particle_pressure_noise"][-1] > 0.5
+
+
+@pytest.mark.slow
+def test_seed_scheme_lets_the_bottom_layer_reach_the_floor(fine_still_water_seed):
+    """Known defect of the seed's mirror images, pinned (it was a strict xfail): an image carries
+    its source's pressure, so the first layer has no hydrostatic support and settles into the
+    image layer at H/40; the drift's reflection safeguard acts (measured: 43 times by 0.5 s)."""
+    assert fine_still_water_seed.sim_reflections > 0
+
+
+@pytest.mark.slow
+def test_defaults_keep_fine_still_water_quiet_and_off_the_floor(fine_still_water_default):
+    """The same two tests with the defaults (midpoint-density leap-frog, Fourtakas diffusion,
+    hydrostatic images, wall repulsion): every check of the case passes at H/40 (Mach < 0.01,
+    gauge pressure within h/H, no reflection)."""
+    res = fine_still_water_default
     assert res.series["mach"].max() < 0.01
+    assert res.sim_reflections == 0
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)
 
 
 @pytest.mark.slow
 def test_still_water_with_stronger_artificial_viscosity_is_stable_at_fine_resolution():
-    """The same fine tank with alpha = 0.1 stays at rest (the control for the xfail above)."""
-    res = hydrostatic.run(40, **hydrostatic.STRONGER_AV)
-    failed = [c.line() for c in res.checks if not c.passed]
-    assert not failed, "\n".join(failed)
-
-
-@pytest.fixture(scope="module")
-def fine_still_water_symplectic():
-    return hydrostatic.run(40, **{"numerics.leapfrog": "symplectic_density"})
-
-
-@pytest.mark.slow
-def test_symplectic_density_keeps_fine_still_water_quiet(fine_still_water_symplectic):
-    """With rho at whole steps (numerics.leapfrog = "symplectic_density") the acoustic mode
-    that grows under the seed's scheme at H/40 stays damped with the seed's alpha = 0.01:
-    spurious Mach and gauge pressure meet the case's tolerances (hydrostatic.py)."""
-    res = fine_still_water_symplectic
-    by_metric = {c.metric: c for c in res.checks}
+    """The seed's scheme with alpha = 0.1 stays quiet (the control for the pinned defect above)."""
+    res = hydrostatic.run(40, **hydrostatic.SEED, **hydrostatic.STRONGER_AV)
     assert res.series["mach"].max() < 0.01
-    assert by_metric["RMS error of time-averaged gauge pressure / (rho0 g H)"].passed
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect of the seed's mirror images: an image carries its source's "
-    "pressure, so the first layer has no hydrostatic support and settles onto the floor at H/40 "
-    "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed",
-)
-def test_bottom_layer_stays_off_the_wall_at_fine_resolution(fine_still_water_symplectic):
-    assert fine_still_water_symplectic.sim_reflections == 0
-
-
-@pytest.mark.slow
-def test_hydrostatic_image_pressure_keeps_fine_still_water_at_rest():
-    """numerics.image_pressure = "hydrostatic" gives the first layer the support the seed's
-    mirror images lack: at H/40 every check of the case passes, with the seed's leap-frog and
-    alpha = 0.01 (no reflection at the floor, spurious Mach < 0.01, gauge pressure within h/H)."""
-    res = hydrostatic.run(40, **{"numerics.image_pressure": "hydrostatic"})
-    failed = [c.line() for c in res.checks if not c.passed]
-    assert not failed, "\n".join(failed)
 
 
 @pytest.fixture(scope="module")

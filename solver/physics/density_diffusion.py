@@ -218,7 +218,9 @@ def water_level(scene) -> float:
             points = np.asarray(block.vertices, float)
         else:
             lo, hi = np.asarray(block.min, float), np.asarray(block.max, float)
-            points = np.array([[(hi if (k >> a) & 1 else lo)[a] for a in range(len(lo))] for k in range(2 ** len(lo))])
+            points = np.array(
+                [[(hi if (k >> a) & 1 else lo)[a] for a in range(len(lo))] for k in range(2 ** len(lo))]
+            )
         top = float(np.max(points @ up))
         if block.saturated and block.water_table is not None:
             top = float(block.water_table)
@@ -232,7 +234,11 @@ def diffusion_settings(scene, materials):
     kind = scene.numerics.density_diffusion
     if kind == DensityDiffusion.NONE or not materials.has_phase(Phase.WATER):
         return None
-    return scene.numerics.density_diffusion_delta, kind == DensityDiffusion.FOURTAKAS, saturated_mixture(scene)
+    return (
+        scene.numerics.density_diffusion_delta,
+        kind == DensityDiffusion.FOURTAKAS,
+        saturated_mixture(scene),
+    )
 
 
 class HydrostaticReference(Term):
@@ -256,7 +262,8 @@ class HydrostaticReference(Term):
         self.writes = ("rho_ref",)
         self.equations = (
             Equation(
-                f"rho^H = rho0 (1 + rho0 |g| (z_s - z) / B)^(1/gamma), z_s = {self.level:g} m (initial water level)",
+                f"rho^H = rho0 (1 + rho0 |g| (z_s - z) / B)^(1/gamma), z_s = {self.level:g} m "
+                "(initial water level)",
                 "Fourtakas et al. (2019), eqs. (13)-(14), per particle; inverse of seed eq. (9)",
             ),
         )
@@ -270,9 +277,11 @@ class HydrostaticReference(Term):
 
 
 def diffusion_equation(delta, hydrostatic, fraction):
-    what = f"delta-SPH density diffusion, delta = {delta:g}" + (
-        ", on rho - rho^H" if hydrostatic else ""
-    ) + (", of rho / n for pore water" if fraction else "")
+    what = (
+        f"delta-SPH density diffusion, delta = {delta:g}"
+        + (", on rho - rho^H" if hydrostatic else "")
+        + (", of rho / n for pore water" if fraction else "")
+    )
     source = "Molteni & Colagrossi (2009) eq. (8); Antuono et al. (2010) eq. (6)" + (
         "; Fourtakas et al. (2019) eqs. (13)-(14)" if hydrostatic else ""
     )
@@ -300,8 +309,10 @@ class DensityDiffusionRate(Term):
         super().__init__()
         self.sound_speed = materials.sound_speed
         self.delta, self.hydrostatic, self.fraction = delta, hydrostatic, fraction
-        self.reads = ("x", "rho", "mass") + (("rho_ref",) if hydrostatic else ()) + (
-            ("water_fraction",) if fraction else ()
+        self.reads = (
+            ("x", "rho", "mass")
+            + (("rho_ref",) if hydrostatic else ())
+            + (("water_fraction",) if fraction else ())
         )
         self.adds_to = ("drho",)
         self.equations = (diffusion_equation(delta, hydrostatic, fraction),)

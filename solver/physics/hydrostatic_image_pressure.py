@@ -5,8 +5,8 @@ to a floor is supported (the seed's mirror image, sec. 2.5, carries only the sou
 from __future__ import annotations
 
 from ..config import kernel
-from ..materials import Phase
 from ..fields import WATER_FRACTION
+from ..materials import Phase
 from ..scene import ImagePressure
 from ..term import Equation, Stage, Term
 from .tait_eos import saturated_mixture

@@ -11,8 +11,9 @@ its normal n (into the fluid) instead of to boundary particles:
 
 D: Monaghan chooses D of the magnitude of the square of the largest velocity and, for his dam
 break of height H, D = 5 g H (the free-fall speed is sqrt(2 g H), so 5 g H = 2.5 v^2; the
-paper's section and equation numbers were not re-checked here: the phase-1 memo's reading). Here H is the scene's largest initial height of a block above
-the lowest point of any block along -g, so D = 5 |g| H; with g = 0 the term is absent.
+paper's section and equation numbers were not re-checked here: the phase-1 memo's reading).
+Here H is the scene's largest initial height of a block above the lowest point of any block
+along -g, so D = 5 |g| H; with g = 0 the term is absent.
 
 Why it is needed (issue 15, /work/coord/impact_design.md sec. 4): with image particles the
 repulsion a particle feels from its own image is proportional to dW/dr at r = 2 d, which
