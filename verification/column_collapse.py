@@ -7,6 +7,12 @@ digitised
 by LandslideSIM/MaterialPointSolver.jl): runout, height at the wall, free-surface profile,
 failure line.
 
+Scheme: numerics.scheme = "seed" (SCHEME below): the seed's exact scheme, with which the committed
+resolution study and the comparison with Bui et al. (2008) were made. The defaults differ for soil
+only by the equilibrium image stress (numerics.image_pressure = "hydrostatic", studied on this case
+in column_collapse_images.py) and the wall repulsion; the collapse with the defaults is a row of
+verification/results/scheme_table.md's soil note.
+
 `resolution` = particles across the column height H0 = 0.1 m (dx = H0 / resolution):
 20 -> 5 mm, 25 -> 4 mm, 40 -> 2.5 mm (Bui et al. 2008 used 2 mm).
 
@@ -212,6 +218,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
         "ke_final_over_peak": float(ke[-1] / ke.max()) if ke.max() > 0 else 0.0,
         "max_yield_excess": float(excess.max()),
         "spacing": dx,
+        "wall_reflections": sim.wall_reflections,
     }
     ref = load_reference()
     series.update(errors(series, ref))

@@ -41,9 +41,10 @@ Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
   at these resolutions it is the water hammer of a front one or two particles thick and it does not
   converge between H/20 and H/40 (verification/results/impact_pressure/README.md); no defensible
   tolerance exists for it yet.
-  e = 2 |f(H/20) - f(H/40)| from the committed resolution study (the error of a first-order
-  result at the coarser spacing is twice the difference; SPH with walls by images is at best first
-  order near a wall), 0 where no study row exists (the check is then as strict as the data).
+  e = the discretisation error at this resolution from the committed resolution study (H/20, H/40,
+  H/80; `allowance`): against the Richardson limit where the three converge monotonically, else the
+  first-order estimate from H/20 and H/40; 0 where no study row exists (the check is then as strict
+  as the data).
 """
 
 from __future__ import annotations
@@ -59,7 +60,18 @@ from solver.kernels import kernel_values
 from solver.scene import parse_scene
 from solver.simulation import Simulation
 
-from .common import RESULTS, CaseResult, Check, case_main, read_csv, save_figure, save_study, study_row
+from .common import (
+    GCI_SAFETY,
+    RESULTS,
+    CaseResult,
+    Check,
+    case_main,
+    read_csv,
+    richardson,
+    save_figure,
+    save_study,
+    study_row,
+)
 
 H = 0.3
 G = 9.81
@@ -77,7 +89,7 @@ PLATEAU = (3.0, 5.5)
 IMPACT_LEVEL = 0.5
 GATE = 0.4  # t*: gate lift time ~0.07 s (data README), one-sided: the model arrives early
 DEFAULT_RESOLUTION = 20  # particles over H
-STUDY_RESOLUTIONS = (20, 40)  # H/80 (12,800 particles, ~20,000 steps) is a nightly-size run
+STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
 STUDY = RESULTS / "impact_pressure" / "study.csv"
 TIME_SCALE = math.sqrt(H / G)
 
@@ -268,14 +280,27 @@ def metrics(run):
 
 
 def allowance(key, resolution):
-    """e = 2 |f(H/20) - f(H/40)| from the committed study (0 if absent or not applicable)."""
-    a, b = study_row(STUDY, 20), study_row(STUDY, 40)
-    if a is None or b is None or resolution > 40:
+    """The discretisation error of metric `key` at `resolution`, from the committed study: with three
+    resolutions that converge monotonically, GCI_SAFETY |f - f0| against the Richardson limit f0
+    (Roache 1998; common.richardson); else, from H/20 and H/40, the first-order estimate (the error
+    halves with dx: e(H/40) = |f20 - f40|, e(H/20) = 2 |f20 - f40|); 0 without a study row."""
+    values = {}
+    for r in STUDY_RESOLUTIONS:
+        row = study_row(STUDY, r)
+        try:
+            values[r] = float(row[key]) if row is not None else float("nan")
+        except (KeyError, ValueError):
+            values[r] = float("nan")
+    finite = {r: v for r, v in values.items() if np.isfinite(v)}
+    if resolution not in finite:
         return 0.0
-    try:
-        return 2.0 * abs(float(a[key]) - float(b[key]))
-    except (KeyError, ValueError):
-        return 0.0
+    if len(finite) >= 3:
+        fit = richardson([H / r for r in finite], list(finite.values()))
+        if fit is not None:
+            return GCI_SAFETY * abs(finite[resolution] - fit[1])
+    if 20 in finite and 40 in finite and resolution in (20, 40):
+        return (2.0 if resolution == 20 else 1.0) * abs(finite[20] - finite[40])
+    return 0.0
 
 
 def band_of(stats):

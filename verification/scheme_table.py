@@ -121,10 +121,33 @@ def markdown(rows):
     return "\n".join(lines) + "\n"
 
 
+SOIL = {"seed scheme": "seed", "defaults": "default"}
+
+
+def soil_rows():
+    """The soil column collapse (column_collapse.py, dx = 5 mm) with the seed's scheme and with the
+    defaults (for soil: equilibrium image stress and the wall repulsion; no water terms)."""
+    from . import column_collapse
+
+    rows = []
+    for label, scheme in SOIL.items():
+        res = column_collapse.run(20, overrides={"numerics": {"scheme": scheme}})
+        s = res.series
+        failed = [c.metric for c in res.checks if not c.passed]
+        rows.append(
+            f"| {label} | {s['runout']:.4f} | {s['wall_height']:.4f} | {s['wall_reflections']} | "
+            f"{', '.join(failed) or 'none'} | {res.wall_time:.1f} ({load()}) |"
+        )
+    head = "| soil collapse, dx = 5 mm | runout (m; exp. 0.442) | height at wall (m; exp. 0.099) | "
+    head += "wall reflections | failed checks | wall s (load) |\n|---|---|---|---|---|---|\n"
+    return head + "\n".join(rows) + "\n"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(RESULTS / "scheme_table.md"))
     parser.add_argument("--only", nargs="*", help="labels (substrings) of the combinations to run")
+    parser.add_argument("--soil", action="store_true", help="also the soil collapse, seed scheme vs defaults")
     args = parser.parse_args(argv)
     numba.set_num_threads(1)
     jsonl = Path(args.out).with_suffix(".jsonl")
@@ -140,8 +163,14 @@ def main(argv=None):
         with open(jsonl, "a") as fh:
             fh.write(json.dumps(done[label], default=float) + "\n")
     rows = [done[k] for k in COMBINATIONS if k in done]
-    Path(args.out).write_text(markdown(rows))
-    print(markdown(rows))
+    text = markdown(rows)
+    soil = Path(args.out).with_name("scheme_table_soil.md")
+    if args.soil:
+        soil.write_text(soil_rows())
+    if soil.exists():
+        text += "\n" + soil.read_text()
+    Path(args.out).write_text(text)
+    print(text)
 
 
 if __name__ == "__main__":
