@@ -3,7 +3,7 @@ sources live in the case modules)."""
 
 import pytest
 
-from verification import column_collapse, dam_break, hydrostatic, soil_self_weight
+from verification import column_collapse, dam_break, hydrostatic, impact_pressure, soil_self_weight
 
 
 @pytest.mark.slow
@@ -112,3 +112,45 @@ def test_soil_self_weight_matches_1d_solution_and_slope_stands(tmp_path):
     assert res.figure.is_file()
     failed = [c.line() for c in res.checks if not c.passed]
     assert not failed, "\n".join(failed)
+
+
+@pytest.fixture(scope="module")
+def impact_ci(tmp_path_factory):
+    """Lobovsky et al. (2014) at H/20 with the defaults (impact_pressure.DEFAULT_RESOLUTION)."""
+    return impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=tmp_path_factory.mktemp("impact"))
+
+
+PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+
+
+@pytest.mark.slow
+def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
+    """No blow-up, zero wall reflections, impact time inside the experiment's window, plateau
+    noise within the spread of the repetitions plus the discretisation allowance."""
+    assert impact_ci.figure.is_file()
+    failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric != PLATEAU_MEAN]
+    assert not failed, "\n".join(failed)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="known discrepancy: the 2D SPH plateau pressure at sensor 2 lies above the repetitions' band "
+    "(mean p* 0.83 at H/20, 0.85 at H/40 against the band's median 0.61 and half-width 0.12) and does not "
+    "move toward it with refinement (verification/results/impact_pressure/README.md); kept visible",
+)
+def test_impact_plateau_mean_at_ci_resolution(impact_ci):
+    check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)
+    assert check.passed, check.line()
+
+
+@pytest.mark.slow
+def test_seed_scheme_on_impact_needs_the_safeguard_and_swings():
+    """The seed's scheme on the same tank, pinned (issue 15): it completes at H/20 only because the
+    drift's safeguard reflects particles (measured 1,620 reflections) and its plateau pressure swings
+    (sd of the 1 ms-filtered p* at sensor 2: 3.1 rho g H, against 0.51 with the defaults and 0.05 in the
+    measured event)."""
+    res = impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=None, scheme="seed")
+    m = res.series["metrics"]
+    assert m["reflections"] > 100
+    assert m["plateau_sd_s2"] > 1.0

@@ -421,7 +421,7 @@ def plot(sim_run, events, band, path):
         if k >= 2:
             ax.set_xlabel("t sqrt(g/H)")
         if k == 1:
-            ax.legend(fontsize=7)
+            ax.legend(fontsize=7, loc="upper right")
     fig.suptitle(
         f"Lobovsky et al. (2014), H = 300 mm: {sim_run['status']}, {sim_run['reflections']} reflections"
     )
