@@ -81,10 +81,11 @@ def serial(tmp_path_factory):
 
 
 def roundoff_tolerances(
-    state, stats, spacing=SPACING, rho0=1000.0, c=15.0, p_max=1000.0 * 9.81 * 2 * A, alpha=0.01
+    state, stats, spacing=SPACING, rho0=1000.0, c=15.0, p_max=1000.0 * 9.81 * 2 * A, alpha=0.01, delta=0.1
 ):
-    """tests/roundoff.py, with the water dam break's parameters as defaults."""
-    return roundoff.roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha)
+    """tests/roundoff.py, with the water dam break's parameters as defaults (delta: the default
+    density diffusion's, defaults.toml; 0 for the seed scheme)."""
+    return roundoff.roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha, delta)
 
 
 @pytest.mark.parametrize("ranks", [2, 3, 4])
@@ -409,7 +410,7 @@ def test_mpi_seed_scheme_equals_serial(tmp_path):
     s, s_stats = _driver(tmp_path / "s", 1, extra)
     m, _ = _driver(tmp_path / "m", 2, extra)
     np.testing.assert_array_equal(m["id"], s["id"])
-    tol_x, tol_v, tol_rho = roundoff_tolerances(s, s_stats)
+    tol_x, tol_v, tol_rho = roundoff_tolerances(s, s_stats, delta=0.0)
     assert np.abs(m["x"] - s["x"]).max() <= tol_x
     assert np.abs(m["v"] - s["v"]).max() <= tol_v
     assert np.abs(m["rho"] - s["rho"]).max() <= tol_rho
@@ -480,7 +481,7 @@ def test_mpi_soil_collapse_equals_serial(tmp_path, image_pressure):
     g, H0 = 9.81, 0.1  # the scene's gravity and column height
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0
+        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0  # no water: no density diffusion
     )
     assert sigma < 3 * rho0 * g * H0  # the stress scale used is the physical one
     for name, err, tol in (
@@ -551,7 +552,7 @@ def test_mpi_3d_soil_equals_serial(tmp_path):
     rho0, c = _soil_density_and_wave_speed(scene)
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0
+        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0  # no water: no density diffusion
     )
     for ranks in (2, 3):
         m, m_stats = run(ranks)

@@ -156,7 +156,10 @@ def main(argv=None):
         done = {
             json.loads(line)["options"]: json.loads(line) for line in jsonl.read_text().splitlines() if line
         }
-    for label, numerics in COMBINATIONS.items():
+    # the two ends first (the seed's scheme and the defaults), so a run cut short still has them
+    order = sorted(COMBINATIONS, key=lambda k: (k != "seed scheme", not k.startswith("defaults")))
+    for label in order:
+        numerics = COMBINATIONS[label]
         if label in done or (args.only and not any(s in label for s in args.only)):
             continue
         done[label] = row(label, numerics)
