@@ -300,7 +300,8 @@ class Numerics(Strict):
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
     scheme: Choice[Scheme] = Scheme.DEFAULT
-    leapfrog: Choice[Leapfrog] = Leapfrog.MIDPOINT_DENSITY  # defaults.toml (with soil: seed, _numerics_defaults)
+    # defaults.toml's; with soil the seed's (_numerics_defaults)
+    leapfrog: Choice[Leapfrog] = Leapfrog.MIDPOINT_DENSITY
     image_pressure: Choice[ImagePressure] = ImagePressure.HYDROSTATIC
     density_diffusion: Choice[DensityDiffusion] = DensityDiffusion.FOURTAKAS
     density_diffusion_delta: Annotated[float, Field(gt=0.0, le=1.0)] = 0.1

@@ -481,8 +481,8 @@ def test_mpi_soil_collapse_equals_serial(tmp_path, image_pressure):
     g, H0 = 9.81, 0.1  # the scene's gravity and column height
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0  # no water: no density diffusion
-    )
+        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0
+    )  # delta = 0: no water, no density diffusion
     assert sigma < 3 * rho0 * g * H0  # the stress scale used is the physical one
     for name, err, tol in (
         ("x", np.abs(m["x"] - s["x"]).max(), tol_x),
@@ -552,8 +552,8 @@ def test_mpi_3d_soil_equals_serial(tmp_path):
     rho0, c = _soil_density_and_wave_speed(scene)
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0  # no water: no density diffusion
-    )
+        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0
+    )  # delta = 0: no water, no density diffusion
     for ranks in (2, 3):
         m, m_stats = run(ranks)
         np.testing.assert_array_equal(m["id"], s["id"])

@@ -124,7 +124,13 @@ def scene(resolution, end_star=T_END, **numerics):
                 "hydrostatic": True,
             }
         ],
-        "output": {"interval": 0.01, "fields": ["pressure"], "vtk": False, "render": False},
+        "output": {
+            "interval": 0.01,
+            "fields": ["pressure"],
+            "vtk": False,
+            "render": False,
+            "render_field": "pressure",
+        },
         "numerics": numerics,
     }
     return parse_scene(raw, "verification/impact_pressure.py")
