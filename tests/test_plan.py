@@ -119,7 +119,8 @@ def test_explain_lists_passes_terms_fields(capsys):
     assert out.returncode == 0
     for text in (
         "fluid rates: water <- water",
-        "continuity [seed eq. (6)]",
+        "midpoint continuity: water <- water",  # the default leap-frog's (issue 15)
+        "rho at whole steps [seed eq. (6)",
         "XSPH [seed eq. (22)]",
         "viscous [seed eq. (30)]",
         "bytes per particle",
