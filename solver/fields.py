@@ -36,3 +36,17 @@ WATER_FRACTION = FieldSpec(
     constant=True,
     default=1.0,
 )
+
+
+def x_prev(dim: int) -> FieldSpec:
+    """x at step n, kept through the drift for the midpoint continuity (numerics.leapfrog =
+    "midpoint_density"); mirrored like x, so an image's x_prev is the image of its source's."""
+    return FieldSpec(dim, np.float64, "position at step n (midpoint continuity)", Mirror.POSITION)
+
+
+RHO_REF = FieldSpec(
+    0,
+    np.float64,
+    "hydrostatic reference density rho^H at step n (Fourtakas et al. 2019 density diffusion)",
+    Mirror.SCALAR,
+)

@@ -99,6 +99,15 @@ def run_metadata(scene: Scene, comm, threads):
     }
 
 
+def reflection_warning(count):
+    """The end-of-run warning when the drift's safeguard had to reflect particles at a wall
+    (issue 15: the walls should hold the water by themselves; the count is a diagnostic)."""
+    return (
+        f"scoursph: warning: {count} specular wall reflection(s): the drift's safeguard put particles "
+        "back inside the walls (wall_reflections in run.json); the wall model did not hold them by itself"
+    )
+
+
 def _on_root(action, out_dir, comm):
     """action() on the root rank; its RunDirError raised on every rank (no rank left waiting)."""
     reason = None
@@ -187,4 +196,6 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True, overwri
                     title=f"{scene.scene.name}  t = {sim.t:.4f} s",
                     domain=(scene.domain.min, scene.domain.max),
                 )
+        if comm.is_root() and summary["wall_reflections"] > 0:
+            print(reflection_warning(summary["wall_reflections"]), file=sys.stderr)
     return RunResult(out_dir, status, wall, sim.step_count, n, rate, sim)

@@ -247,7 +247,34 @@ class Leapfrog(StrEnum):
     """Time levels of the leap-frog (numerics.leapfrog)."""
 
     SEED = "seed"  # rho and v at half steps (seed eqs. 24-25)
-    SYMPLECTIC_DENSITY = "symplectic_density"  # rho at whole steps, from v at n+1/2 after the drift
+    MIDPOINT_DENSITY = "midpoint_density"  # rho at whole steps, continuity at the drift's midpoint
+
+
+class DensityDiffusion(StrEnum):
+    """Density diffusion added to the continuity equation (numerics.density_diffusion)."""
+
+    NONE = "none"  # the seed's continuity, eq. (6), alone
+    MOLTENI = "molteni"  # delta-SPH of Molteni & Colagrossi (2009)
+    FOURTAKAS = "fourtakas"  # the same on the dynamic density rho - rho^H (Fourtakas et al. 2019)
+
+
+class Scheme(StrEnum):
+    """A preset of every numerics option (numerics.scheme): explicit keys override it."""
+
+    DEFAULT = "default"  # the values of defaults.toml
+    SEED = "seed"  # the seed paper's exact scheme (SCHEMES below)
+
+
+SCHEMES = {
+    Scheme.DEFAULT: {},
+    Scheme.SEED: {
+        "leapfrog": "seed",
+        "image_pressure": "mirror",
+        "density_diffusion": "none",
+        "wall_repulsion": False,
+    },
+}
+"""What each numerics.scheme sets. Precedence: defaults.toml < the preset < the scene's own keys."""
 
 
 class ImagePressure(StrEnum):
@@ -272,8 +299,13 @@ class Numerics(Strict):
     neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
-    leapfrog: Choice[Leapfrog] = Leapfrog.SEED
-    image_pressure: Choice[ImagePressure] = ImagePressure.MIRROR
+    scheme: Choice[Scheme] = Scheme.DEFAULT
+    # defaults.toml's; with soil the seed's (_numerics_defaults)
+    leapfrog: Choice[Leapfrog] = Leapfrog.MIDPOINT_DENSITY
+    image_pressure: Choice[ImagePressure] = ImagePressure.HYDROSTATIC
+    density_diffusion: Choice[DensityDiffusion] = DensityDiffusion.FOURTAKAS
+    density_diffusion_delta: Annotated[float, Field(gt=0.0, le=1.0)] = 0.1
+    wall_repulsion: bool = True
     seepage: Choice[Seepage] = Seepage.MIXTURE
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
@@ -429,7 +461,11 @@ def _check_consistency(s: Scene):
                 "scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)"
             )
     if s.numerics.leapfrog != Leapfrog.SEED and any(m.model != "water" for m in s.materials.values()):
-        raise _Inconsistent("numerics.leapfrog", "symplectic_density is implemented for water-only scenes")
+        raise _Inconsistent(
+            "numerics.leapfrog",
+            "midpoint_density is implemented for water-only scenes (with soil, leave the key out: the "
+            "default is then 'seed')",
+        )
     for name in s.numerics.artificial_viscosity:
         if name not in s.materials:
             raise _Inconsistent(f"numerics.artificial_viscosity.{name}", "no material of that name")
@@ -612,6 +648,23 @@ def _reason(err) -> str:
     return err["msg"]
 
 
+def _numerics_defaults(raw: dict, defaults: dict) -> dict:
+    """defaults.toml's [numerics], then the preset of numerics.scheme over it (SCHEMES), then
+    the scene-dependent default of the leap-frog: the midpoint-density leap-frog is for water
+    only, so a scene with a soil material that does not name a leap-frog gets the seed's.
+    A malformed scheme or materials table is left for the validation to refuse by its key."""
+    numerics = raw.get("numerics") if isinstance(raw.get("numerics"), dict) else {}
+    out = copy.deepcopy(defaults)
+    scheme = numerics.get("scheme", out["numerics"].get("scheme", "default"))
+    preset = SCHEMES.get(scheme, {}) if isinstance(scheme, str) else {}
+    out["numerics"].update(preset)
+    materials = raw.get("materials") if isinstance(raw.get("materials"), dict) else {}
+    models = [m.get("model") for m in materials.values() if isinstance(m, dict)]
+    if "leapfrog" not in numerics and "leapfrog" not in preset and any(m != "water" for m in models):
+        out["numerics"]["leapfrog"] = Leapfrog.SEED.value
+    return out
+
+
 def _refusal(exc: ValidationError, path, prefix=()) -> SceneError:
     err = exc.errors()[0]
     ctx_error = err.get("ctx", {}).get("error")
@@ -622,7 +675,7 @@ def _refusal(exc: ValidationError, path, prefix=()) -> SceneError:
 
 def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
-    merged = deep_merge(defaults, raw)
+    merged = deep_merge(_numerics_defaults(raw, defaults), raw)
     _default_fields_for_the_phases(raw, merged)
     for table in ("material_defaults", "artificial_viscosity_defaults"):
         # checked before they are filled in, so an error names the key the user wrote

@@ -26,21 +26,36 @@ def renormalised_gradient(targets, x, rho, mass, h, dim, nbr_lists):
     return out
 
 
-def density_diffusion(targets, x, rho, mass, c0, delta, h, dim, nbr_lists, rho_ref=None, grad_rho=None):
+def density_diffusion(
+    targets, x, rho, mass, c0, delta, h, dim, nbr_lists, rho_ref=None, grad_rho=None, fraction=None
+):
+    """With `fraction` (pore water): the diffused quantity is rho / n, the rate n_i times its diffusion."""
     out = np.zeros(len(x))
     ref = np.zeros(len(x)) if rho_ref is None else rho_ref
+    n = np.ones(len(x)) if fraction is None else fraction
+    q = rho / n
     for t, i in enumerate(targets):
         total = 0.0
         for j in nbr_lists[t]:
             xji = x[j] - x[i]
-            psi = 2.0 * ((rho[j] - rho[i]) - (ref[j] - ref[i])) * xji / np.dot(xji, xji)
+            psi = 2.0 * ((q[j] - q[i]) - (ref[j] - ref[i])) * xji / np.dot(xji, xji)
             if grad_rho is not None:
                 psi = psi - (grad_rho[i] + grad_rho[j])
             total += np.dot(psi, grad_w(x[i], x[j], h, dim)) * mass[j] / rho[j]
-        out[i] = delta * h * c0 * total
+        out[i] = delta * h * c0 * total * n[i]
     return out
 
 
 def hydrostatic_density(z, level, rho0, b, gamma, g):
     """Inverse Tait law (seed eq. 9) of p = rho0 g (level - z)."""
     return rho0 * (1.0 + rho0 * g * (level - z) / b) ** (1.0 / gamma)
+
+
+def midpoint_continuity(targets, x, x_old, v, rho, mass, h, dim, nbr_lists):
+    """Seed eq. (6) with every position at the midpoint (x + x_old) / 2."""
+    mid = 0.5 * (x + x_old)
+    out = np.zeros(len(x))
+    for t, i in enumerate(targets):
+        for j in nbr_lists[t]:
+            out[i] += mass[j] * np.dot(v[i] - v[j], grad_w(mid[i], mid[j], h, dim))
+    return out

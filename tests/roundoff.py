@@ -4,7 +4,7 @@ test_soil_3d.py)."""
 import numpy as np
 
 
-def roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha):
+def roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha, delta=0.0):
     """Tolerances on |x|, |v| and |rho| differences between two runs that sum the same pair
     terms in different orders (serial vs MPI; mirror-symmetric particles of one run).
 
@@ -17,6 +17,12 @@ def roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha):
       momentum (eq. 7):   sum|t| <= (2 p_max / rho0 + 2 alpha c v_max) G
                           (soil, eq. 20: p_max the largest stress magnitude, c the P-wave speed)
       continuity (eq. 6): sum|t| <= rho0 (2 v_max) G
+      density diffusion (numerics.density_diffusion, delta > 0; issue 15), summed in the same loop:
+                          sum|t| <= delta h c 2 dq_max k max|dW/dr / r| max(m/rho), dq_max the
+                          largest difference of the diffused density q = rho - rho^H between two
+                          particles: the spread of rho in `state` plus that of rho^H, the inverse
+                          Tait law of p_max (Tait, gamma = 7). The other issue-15 terms add no sum
+                          whose order can change (wall repulsion, image increment: per particle).
     with G = sum_j (m_j / rho_j) |dW/dr(r_ij)| (bounded below), p_max the largest pressure
     (hydrostatic at the bottom of the column) and v_max the fastest particle.
     (The viscous term, nu = 1e-6 m^2/s, is 1e-4 of these and left out.)
@@ -68,6 +74,13 @@ def roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha):
     v_max = float(np.max(np.linalg.norm(state["v"], axis=1))) + 1e-3
     da = 2 * gamma * (2 * p_max / rho0 + 2 * alpha * c * v_max) * G
     dD = 2 * gamma * rho0 * 2 * v_max * G
+    if delta > 0.0:
+        rr = r[1:]
+        fr_max = max(abs(float(cubic_spline_dwdr(float(q), h, norm))) / q for q in rr)
+        rho = np.asarray(state["rho"], dtype=float)
+        rho_h = rho0 * (1.0 + p_max / (rho0 * c * c / 7.0)) ** (1.0 / 7.0) - rho0
+        dq_max = float(rho.max() - rho.min()) + rho_h
+        dD += 2 * gamma * delta * h * c * 2.0 * dq_max * k * fr_max * volume
     n_dt = stats["t"]  # N dt
     steps = int(stats.get("steps", state.get("steps", 0)))
     omega_dt = _fastest_sph_mode(dim, h, dx, norm) * c * (0.25 * h / c)

@@ -25,8 +25,8 @@ def test_seed_scheme_grows_undamped_and_needs_dissipation():
 
 
 def test_whole_step_density_is_neutral_and_damped_only_by_the_dissipative_terms():
-    """rho at whole steps with one rate evaluation per step (numerics.leapfrog = "symplectic_density",
-    and the proposed midpoint-continuity kick-drift-kick, which is the same linear map): |G| = 1 without
+    """rho at whole steps with one rate evaluation per step (numerics.leapfrog = "midpoint_density",
+    and the former end-point "symplectic_density", the same linear map): |G| = 1 without
     damping up to omega dt < 2, < 1 with AV or density diffusion (issue 15's growth table)."""
     from verification.leapfrog_stability import whole_step_density_amplification
 

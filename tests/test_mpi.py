@@ -81,10 +81,11 @@ def serial(tmp_path_factory):
 
 
 def roundoff_tolerances(
-    state, stats, spacing=SPACING, rho0=1000.0, c=15.0, p_max=1000.0 * 9.81 * 2 * A, alpha=0.01
+    state, stats, spacing=SPACING, rho0=1000.0, c=15.0, p_max=1000.0 * 9.81 * 2 * A, alpha=0.01, delta=0.1
 ):
-    """tests/roundoff.py, with the water dam break's parameters as defaults."""
-    return roundoff.roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha)
+    """tests/roundoff.py, with the water dam break's parameters as defaults (delta: the default
+    density diffusion's, defaults.toml; 0 for the seed scheme)."""
+    return roundoff.roundoff_tolerances(state, stats, spacing, rho0, c, p_max, alpha, delta)
 
 
 @pytest.mark.parametrize("ranks", [2, 3, 4])
@@ -398,17 +399,18 @@ def _not_zombie(pid):
         return False
 
 
-def test_mpi_symplectic_density_equals_serial(tmp_path):
-    """numerics.leapfrog = "symplectic_density" adds a post-drift continuity pass with its own
-    halo refresh (x, v_half): 2 ranks still give the serial state within the same round-off
-    bounds (derived in roundoff_tolerances)."""
-    extra = ('numerics.leapfrog="symplectic_density"',)
+def test_mpi_seed_scheme_equals_serial(tmp_path):
+    """numerics.scheme = "seed" (half-step leap-frog, mirror images, no diffusion, no repulsion):
+    2 ranks give the serial state within the same round-off bounds (derived in
+    roundoff_tolerances); the default scheme (midpoint continuity with x_prev exchanged like x,
+    density diffusion, hydrostatic images, wall repulsion) is the other tests' scheme."""
+    extra = ('numerics.scheme="seed"',)
     (tmp_path / "s").mkdir()
     (tmp_path / "m").mkdir()
     s, s_stats = _driver(tmp_path / "s", 1, extra)
     m, _ = _driver(tmp_path / "m", 2, extra)
     np.testing.assert_array_equal(m["id"], s["id"])
-    tol_x, tol_v, tol_rho = roundoff_tolerances(s, s_stats)
+    tol_x, tol_v, tol_rho = roundoff_tolerances(s, s_stats, delta=0.0)
     assert np.abs(m["x"] - s["x"]).max() <= tol_x
     assert np.abs(m["v"] - s["v"]).max() <= tol_v
     assert np.abs(m["rho"] - s["rho"]).max() <= tol_rho
@@ -479,8 +481,8 @@ def test_mpi_soil_collapse_equals_serial(tmp_path, image_pressure):
     g, H0 = 9.81, 0.1  # the scene's gravity and column height
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0
-    )
+        s, s_stats, spacing=0.005, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0
+    )  # delta = 0: no water, no density diffusion
     assert sigma < 3 * rho0 * g * H0  # the stress scale used is the physical one
     for name, err, tol in (
         ("x", np.abs(m["x"] - s["x"]).max(), tol_x),
@@ -550,8 +552,8 @@ def test_mpi_3d_soil_equals_serial(tmp_path):
     rho0, c = _soil_density_and_wave_speed(scene)
     sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()
     tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0
-    )
+        s, s_stats, spacing=0.01, rho0=rho0, c=c, p_max=sigma, alpha=1.0, delta=0.0
+    )  # delta = 0: no water, no density diffusion
     for ranks in (2, 3):
         m, m_stats = run(ranks)
         np.testing.assert_array_equal(m["id"], s["id"])

@@ -312,8 +312,9 @@ def test_equilibrium_image_stress_matches_twin_in_3d_with_tilted_gravity(rng):
 
 
 def test_equilibrium_image_stress_holds_the_ci_size_collapse_deposit_at_rest():
-    """The control for test_soil_hard_cases::test_collapse_deposit_ci_size_stays_at_rest (strict
-    xfail with the seed's mirror images): with the equilibrium image stress the 1 cm deposit's
+    """The control for test_soil_hard_cases::test_seed_scheme_lets_a_bottom_row_particle_of_the_ci_size_
+    deposit_slip (the seed's mirror images, pinned): with the equilibrium image stress alone (seed
+    scheme otherwise) the 1 cm deposit's
     bottom row is pushed back out of the image layer and the deposit stays at rest for 10
     collapse times (same checks)."""
     import test_soil_hard_cases as hard

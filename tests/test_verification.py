@@ -3,7 +3,7 @@ sources live in the case modules)."""
 
 import pytest
 
-from verification import column_collapse, dam_break, hydrostatic, soil_self_weight
+from verification import column_collapse, dam_break, hydrostatic, impact_pressure, soil_self_weight
 
 
 @pytest.mark.slow
@@ -21,62 +21,53 @@ def test_still_water_stays_hydrostatic(tmp_path):
     assert not failed, "\n".join(failed)
 
 
+@pytest.fixture(scope="module")
+def fine_still_water_seed():
+    return hydrostatic.run(40, **hydrostatic.SEED)
+
+
+@pytest.fixture(scope="module")
+def fine_still_water_default():
+    return hydrostatic.run(40)
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect: with the seed's alpha = 0.01 an acoustic mode grows "
-    "exponentially in still water at H/40 after ~0.25 s (alpha = 0.1 is stable): the seed's half-step "
-    "leap-frog "
-    "is not symplectic (verification/leapfrog_stability.py); kept visible until fixed",
-)
-def test_still_water_stays_quiet_at_fine_resolution():
-    res = hydrostatic.run(40)
+def test_seed_scheme_grows_an_acoustic_mode_in_fine_still_water(fine_still_water_seed):
+    """Known defect of the seed's scheme, pinned (it was a strict xfail): with alpha = 0.01 the
+    half-step leap-frog is not neutral (verification/leapfrog_stability.py) and an acoustic mode
+    grows in still water at H/40 after ~0.25 s. Measured (hydrostatic_study.md): spurious Mach
+    0.0103 at 0.5 s, per-particle pressure noise 1.41 rho0 g H. Pinned as: the Mach number passes
+    the case's 0.01 tolerance, and the noise exceeds 0.5 rho0 g H (the defaults: 0.003)."""
+    res = fine_still_water_seed
+    assert res.series["mach"].max() > 0.01
+    assert res.series["particle_pressure_noise"][-1] > 0.5
+
+
+@pytest.mark.slow
+def test_seed_scheme_lets_the_bottom_layer_reach_the_floor(fine_still_water_seed):
+    """Known defect of the seed's mirror images, pinned (it was a strict xfail): an image carries
+    its source's pressure, so the first layer has no hydrostatic support and settles into the
+    image layer at H/40; the drift's reflection safeguard acts (measured: 43 times by 0.5 s)."""
+    assert fine_still_water_seed.sim_reflections > 0
+
+
+@pytest.mark.slow
+def test_defaults_keep_fine_still_water_quiet_and_off_the_floor(fine_still_water_default):
+    """The same two tests with the defaults (midpoint-density leap-frog, Fourtakas diffusion,
+    hydrostatic images, wall repulsion): every check of the case passes at H/40 (Mach < 0.01,
+    gauge pressure within h/H, no reflection)."""
+    res = fine_still_water_default
     assert res.series["mach"].max() < 0.01
+    assert res.sim_reflections == 0
+    failed = [c.line() for c in res.checks if not c.passed]
+    assert not failed, "\n".join(failed)
 
 
 @pytest.mark.slow
 def test_still_water_with_stronger_artificial_viscosity_is_stable_at_fine_resolution():
-    """The same fine tank with alpha = 0.1 stays at rest (the control for the xfail above)."""
-    res = hydrostatic.run(40, **hydrostatic.STRONGER_AV)
-    failed = [c.line() for c in res.checks if not c.passed]
-    assert not failed, "\n".join(failed)
-
-
-@pytest.fixture(scope="module")
-def fine_still_water_symplectic():
-    return hydrostatic.run(40, **{"numerics.leapfrog": "symplectic_density"})
-
-
-@pytest.mark.slow
-def test_symplectic_density_keeps_fine_still_water_quiet(fine_still_water_symplectic):
-    """With rho at whole steps (numerics.leapfrog = "symplectic_density") the acoustic mode
-    that grows under the seed's scheme at H/40 stays damped with the seed's alpha = 0.01:
-    spurious Mach and gauge pressure meet the case's tolerances (hydrostatic.py)."""
-    res = fine_still_water_symplectic
-    by_metric = {c.metric: c for c in res.checks}
+    """The seed's scheme with alpha = 0.1 stays quiet (the control for the pinned defect above)."""
+    res = hydrostatic.run(40, **hydrostatic.SEED, **hydrostatic.STRONGER_AV)
     assert res.series["mach"].max() < 0.01
-    assert by_metric["RMS error of time-averaged gauge pressure / (rho0 g H)"].passed
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known defect of the seed's mirror images: an image carries its source's "
-    "pressure, so the first layer has no hydrostatic support and settles onto the floor at H/40 "
-    "(reflection safeguard acts ~30 times by 0.5 s); kept visible until fixed",
-)
-def test_bottom_layer_stays_off_the_wall_at_fine_resolution(fine_still_water_symplectic):
-    assert fine_still_water_symplectic.sim_reflections == 0
-
-
-@pytest.mark.slow
-def test_hydrostatic_image_pressure_keeps_fine_still_water_at_rest():
-    """numerics.image_pressure = "hydrostatic" gives the first layer the support the seed's
-    mirror images lack: at H/40 every check of the case passes, with the seed's leap-frog and
-    alpha = 0.01 (no reflection at the floor, spurious Mach < 0.01, gauge pressure within h/H)."""
-    res = hydrostatic.run(40, **{"numerics.image_pressure": "hydrostatic"})
-    failed = [c.line() for c in res.checks if not c.passed]
-    assert not failed, "\n".join(failed)
 
 
 @pytest.fixture(scope="module")
@@ -136,3 +127,45 @@ def test_soil_self_weight_matches_1d_solution_and_slope_stands(tmp_path):
     assert res.figure.is_file()
     failed = [c.line() for c in res.checks if not c.passed]
     assert not failed, "\n".join(failed)
+
+
+@pytest.fixture(scope="module")
+def impact_ci(tmp_path_factory):
+    """Lobovsky et al. (2014) at H/20 with the defaults (impact_pressure.DEFAULT_RESOLUTION)."""
+    return impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=tmp_path_factory.mktemp("impact"))
+
+
+PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+
+
+@pytest.mark.slow
+def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
+    """No blow-up, zero wall reflections, impact time inside the experiment's window, plateau
+    noise within the spread of the repetitions plus the discretisation allowance."""
+    assert impact_ci.figure.is_file()
+    failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric != PLATEAU_MEAN]
+    assert not failed, "\n".join(failed)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="known discrepancy: the 2D SPH plateau pressure at sensor 2 lies above the repetitions' band "
+    "(mean p* 0.83 at H/20, 0.85 at H/40 against the band's median 0.61 and half-width 0.12) and does not "
+    "move toward it with refinement (verification/results/impact_pressure/README.md); kept visible",
+)
+def test_impact_plateau_mean_at_ci_resolution(impact_ci):
+    check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)
+    assert check.passed, check.line()
+
+
+@pytest.mark.slow
+def test_seed_scheme_on_impact_needs_the_safeguard_and_swings():
+    """The seed's scheme on the same tank, pinned (issue 15): it completes at H/20 only because the
+    drift's safeguard reflects particles (measured 1,620 reflections) and its plateau pressure swings
+    (sd of the 1 ms-filtered p* at sensor 2: 3.1 rho g H, against 0.51 with the defaults and 0.05 in the
+    measured event)."""
+    res = impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=None, scheme="seed")
+    m = res.series["metrics"]
+    assert m["reflections"] > 100
+    assert m["plateau_sd_s2"] > 1.0

@@ -15,6 +15,9 @@ first cell column), a different quantity: it is compared in a note, not a check.
 Tolerances (see `tolerances`): the experiment's own scatter, measured from the data as the
 RMS difference between Martin & Moyce's two column sizes, plus this run's discretization
 error from the resolution study in verification/results/dam_break_study.csv.
+Scheme: the solver's defaults (numerics.scheme = "default": midpoint-density leap-frog, Fourtakas
+density diffusion, hydrostatic image pressure, wall repulsion; defaults.toml), the scheme a user
+gets; the seed's scheme on this case is a row of verification/results/scheme_table.md.
 """
 
 from __future__ import annotations

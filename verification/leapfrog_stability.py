@@ -30,8 +30,9 @@ def staggered_amplification(omega_dt):
 
 def whole_step_density_amplification(omega_dt, alpha=0.0, diffusion=0.0, predicted_av=True):
     """rho at whole steps, v at half steps, one rate evaluation per step, with the damping terms:
-    the scheme of numerics.leapfrog = "symplectic_density" and of a kick-drift-kick (velocity Verlet)
-    with the density updated after the drift (linearly the two are the same map).
+    the scheme of numerics.leapfrog = "midpoint_density" (the default for water) and of the former
+    "symplectic_density" (grad W at the end of the drift; linearly the same map: the two differ only
+    in the nonlinear quadrature of grad W, solver/physics/midpoint_continuity.py).
         v_n       = v_{n-1/2} + a_{n-1} / 2          (predicted: the AV needs a whole-step velocity)
         a_n       = w rho_n - alpha w v_n
         v_{n+1/2} = v_{n-1/2} + a_n

@@ -21,6 +21,7 @@ CASES = {
     "hydrostatic": "verification.hydrostatic",
     "column_collapse": "verification.column_collapse",
     "soil_self_weight": "verification.soil_self_weight",
+    "impact_pressure": "verification.impact_pressure",
 }
 
 

@@ -1,5 +1,8 @@
 """Soil under its own weight: a laterally confined elastic column, and a slope that must stand.
 
+Scheme: numerics.scheme = "seed" (column_collapse.SCHEME, through scene_at): the seed's exact
+scheme, with which the committed resolution study was made.
+
 1. Confined column (oedometer). A soil column of height H between two free-slip walls on a
    rigid floor (no lateral strain, no wall shear: 1D), released stress-free under gravity.
    The friction angle is large (60 deg) so it stays elastic: in uniaxial strain

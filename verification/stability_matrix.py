@@ -86,12 +86,10 @@ SEED_SAND = {
 }
 
 # Cells that fail today, with the measured failure: strict xfails in tests/test_stability_matrix.py.
-# Measured with the crack-density fix (issue 14); the water cells are issue 15's (the water scheme).
-KNOWN_FAILURES: dict[str, str] = {
-    "dam_break_r40": "issue 15: blow-up at t = 0.5996 s (step 19381) as the surge runs up the far wall: a "
-    "particle crossed a wall by 5.05 mm in one step (more than h = 1.86 mm), acceleration 4.4e7 m/s^2 at "
-    "x = (0.444, 0.0055) m (measured 2026-12-01, verification/results/stability_matrix/matrix.md)",
-}
+# Measured with the crack-density fix (issue 14). dam_break_r40 was one (issue 15: blow-up at t = 0.5996 s
+# with the seed's scheme, a particle 5 mm through the far wall); with the issue-15 defaults it completes
+# with zero wall reflections (2026-12-01, matrix.md), so it is a plain passing cell now.
+KNOWN_FAILURES: dict[str, str] = {}
 
 
 @dataclass

@@ -6,25 +6,29 @@ within a stage; a term that needs another's output comes after it.
 """
 
 from .artificial_stress import ArtificialStress, ArtificialStressForce
+from .density_diffusion import DensityDiffusionRate, HydrostaticReference
 from .equilibrium_soil_images import EquilibriumSoilImages
 from .fixed_particles import FixedParticles
 from .fluid_rates import FluidRates
 from .frictional_walls import FrictionalWalls
 from .gravity import Gravity
 from .hydrostatic_image_pressure import HydrostaticImagePressure
+from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
-from .symplectic_continuity import SymplecticContinuity
 from .tait_eos import TaitEquationOfState
 from .viscous_stress import ViscousStress
 from .wall_images import WallImages
+from .wall_repulsion import WallRepulsion
 
 TERMS = (
     WallImages,
     Gravity,
+    WallRepulsion,
     TaitEquationOfState,
     HydrostaticImagePressure,
+    HydrostaticReference,
     PorePressureAtSoil,
     SoilStressState,
     ArtificialStress,
@@ -32,11 +36,13 @@ TERMS = (
     FrictionalWalls,
     ViscousStress,
     FluidRates,
+    DensityDiffusionRate,
     SoilRates,
     ArtificialStressForce,
     SeepageOnSoil,
     SeepageOnWater,
     FixedParticles,
     SoilReturnMapping,
-    SymplecticContinuity,
+    MidpointStart,
+    MidpointContinuity,
 )

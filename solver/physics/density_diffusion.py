@@ -40,7 +40,12 @@ import numpy as np
 from numba import prange
 
 from ..config import kernel
+from ..fields import RHO_REF
 from ..kernels import cubic_spline_dwdr
+from ..materials import Phase
+from ..scene import DensityDiffusion, Leapfrog
+from ..term import Equation, Stage, Term
+from .tait_eos import saturated_mixture
 
 
 @kernel(parallel=True)
@@ -60,8 +65,14 @@ def density_diffusion(
     rho_ref=None,  # hydrostatic reference density per particle: Fourtakas et al. (2019)
     grad_rho=None,  # renormalised density gradient per particle: Antuono et al. (2010)
     is3d=None,
+    fraction=None,  # water volume fraction (pore water of the mixture seepage): diffuse rho / fraction
 ):
-    """drho_i += delta h c0 sum_j psi_ij . grad_i W_ij m_j / rho_j (see module doc for psi_ij)."""
+    """drho_i += delta h c0 sum_j psi_ij . grad_i W_ij m_j / rho_j (see module doc for psi_ij).
+
+    With `fraction` (pore water of apparent density n rho_w next to free water, docs/seepage.md)
+    the diffused quantity is the intrinsic density rho / n, whose Tait law is the same for both
+    (tait_eos.py), so a pore-free interface at equal pressure sees no flux; the rate of the
+    apparent density is then n_i times the diffusion of rho / n."""
     for t in prange(targets.shape[0]):
         i = targets[t]
         xi0, xi1 = x[i, 0], x[i, 1]
@@ -69,6 +80,8 @@ def density_diffusion(
         if is3d is not None:
             xi2 = x[i, 2]
         dyn_i = rho[i]  # the density diffused: rho, or its dynamic part rho - rho^H (Fourtakas et al.)
+        if fraction is not None:
+            dyn_i = rho[i] / fraction[i]
         if rho_ref is not None:
             dyn_i -= rho_ref[i]
         gi0 = gi1 = gi2 = 0.0
@@ -89,6 +102,8 @@ def density_diffusion(
             fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij, x_ij = x_i - x_j
             # psi_ij . grad_i W_ij = 2 (rho_j - rho_i) (x_ji . x_ij) fr / r^2 = 2 (rho_i - rho_j) fr
             dyn_j = rho[j]
+            if fraction is not None:
+                dyn_j = rho[j] / fraction[j]
             if rho_ref is not None:  # each particle's dynamic part first: exactly 0 - 0 at rest
                 dyn_j -= rho_ref[j]
             term = 2.0 * (dyn_i - dyn_j) * fr
@@ -98,6 +113,8 @@ def density_diffusion(
                     gs += (gi2 + grad_rho[j, 2]) * d2
                 term -= gs * fr
             acc += term * mass[j] / rho[j]
+        if fraction is not None:
+            acc *= fraction[i]
         drho[i] += delta * h * sound_speed[material[i]] * acc
 
 
@@ -173,8 +190,137 @@ def hydrostatic_reference_density(n, x, material, gravity, level, rho0, eos_b, e
     gn = np.sqrt(g2)
     for i in prange(n):
         m = material[i]
+        if eos_b[m] == 0.0:  # not water (soil rows): no Tait law, never diffused
+            rho_ref[i] = rho0[m]
+            continue
         depth = level  # level - z, z = -g^ . x
         for a in range(dim):
             if gn > 0.0:
                 depth += gravity[a] / gn * x[i, a]
         rho_ref[i] = rho0[m] * (1.0 + rho0[m] * gn * depth / eos_b[m]) ** (1.0 / exponent[m])
+
+
+# -- the terms ----------------------------------------------------------------------------------
+
+
+def water_level(scene) -> float:
+    """The initial free-surface height along -g (m): the highest point of any water block, or
+    of a saturated soil block's pore water (its water_table, else its top). rho^H only enters
+    through differences, which the level moves at second order (hydrostatic_reference_density)."""
+    g = np.asarray(scene.scene.gravity, float)
+    up = -g / np.linalg.norm(g) if np.any(g != 0.0) else np.zeros_like(g)
+    level = -np.inf
+    for block in scene.blocks:
+        material = scene.materials[block.material]
+        if material.model != "water" and not block.saturated:
+            continue
+        if hasattr(block, "vertices"):
+            points = np.asarray(block.vertices, float)
+        else:
+            lo, hi = np.asarray(block.min, float), np.asarray(block.max, float)
+            points = np.array(
+                [[(hi if (k >> a) & 1 else lo)[a] for a in range(len(lo))] for k in range(2 ** len(lo))]
+            )
+        top = float(np.max(points @ up))
+        if block.saturated and block.water_table is not None:
+            top = float(block.water_table)
+        level = max(level, top)
+    return level if np.isfinite(level) else 0.0
+
+
+def diffusion_settings(scene, materials):
+    """(delta, hydrostatic reference?, pore-water fractions?) of numerics.density_diffusion, or
+    None when it is off or the scene has no water."""
+    kind = scene.numerics.density_diffusion
+    if kind == DensityDiffusion.NONE or not materials.has_phase(Phase.WATER):
+        return None
+    return (
+        scene.numerics.density_diffusion_delta,
+        kind == DensityDiffusion.FOURTAKAS,
+        saturated_mixture(scene),
+    )
+
+
+class HydrostaticReference(Term):
+    """rho^H of every owned particle at step n (Fourtakas et al. 2019), for the density diffusion;
+    images copy their source's (Mirror.SCALAR): computing it at an image's own position would
+    give a flux through the floor in still water."""
+
+    name = "hydrostatic reference density"
+    stage = Stage.STATE
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = diffusion_settings(scene, materials)
+        return cls(scene, materials) if settings is not None and settings[1] else None
+
+    def __init__(self, scene, materials):
+        super().__init__()
+        self.materials = materials
+        self.level = water_level(scene)
+        self.fields = {"rho_ref": RHO_REF}
+        self.writes = ("rho_ref",)
+        self.equations = (
+            Equation(
+                f"rho^H = rho0 (1 + rho0 |g| (z_s - z) / B)^(1/gamma), z_s = {self.level:g} m "
+                "(initial water level)",
+                "Fourtakas et al. (2019), eqs. (13)-(14), per particle; inverse of seed eq. (9)",
+            ),
+        )
+
+    def run(self, ctx):
+        ps, m = ctx.particles, self.materials
+        hydrostatic_reference_density(
+            ps.n_owned, ps["x"], ps["material"], ctx.gravity, self.level, m.rho0, m.eos_b, m.eos_exponent,
+            ps["rho_ref"],
+        )  # fmt: skip
+
+
+def diffusion_equation(delta, hydrostatic, fraction):
+    what = (
+        f"delta-SPH density diffusion, delta = {delta:g}"
+        + (", on rho - rho^H" if hydrostatic else "")
+        + (", of rho / n for pore water" if fraction else "")
+    )
+    source = "Molteni & Colagrossi (2009) eq. (8); Antuono et al. (2010) eq. (6)" + (
+        "; Fourtakas et al. (2019) eqs. (13)-(14)" if hydrostatic else ""
+    )
+    return Equation(what, source)
+
+
+class DensityDiffusionRate(Term):
+    """The density diffusion added to drho at step n, with the seed's half-step leap-frog (with
+    numerics.leapfrog = "midpoint_density" it is fused into the midpoint continuity instead,
+    midpoint_continuity.py)."""
+
+    name = "density diffusion"
+    stage = Stage.RATES
+    targets = Phase.WATER
+    neighbours = Phase.WATER
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = diffusion_settings(scene, materials)
+        if settings is None or scene.numerics.leapfrog != Leapfrog.SEED:
+            return None
+        return cls(materials, *settings)
+
+    def __init__(self, materials, delta, hydrostatic, fraction):
+        super().__init__()
+        self.sound_speed = materials.sound_speed
+        self.delta, self.hydrostatic, self.fraction = delta, hydrostatic, fraction
+        self.reads = (
+            ("x", "rho", "mass")
+            + (("rho_ref",) if hydrostatic else ())
+            + (("water_fraction",) if fraction else ())
+        )
+        self.adds_to = ("drho",)
+        self.equations = (diffusion_equation(delta, hydrostatic, fraction),)
+
+    def run(self, ctx):
+        ps, nl = ctx.particles, ctx.neighbours(self)
+        density_diffusion(
+            nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["material"], self.sound_speed,
+            self.delta, ctx.h, ctx.norm, ps["drho"], ps["rho_ref"] if self.hydrostatic else None, None,
+            ctx.is3d, ps["water_fraction"] if self.fraction else None,
+        )  # fmt: skip

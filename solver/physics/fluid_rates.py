@@ -156,7 +156,7 @@ class FluidRates(Term):
         num = scene.numerics
         water = materials.ids_of_phase(Phase.WATER)
         self.sound_speed = materials.sound_speed
-        # with the symplectic leap-frog, continuity runs after the drift (symplectic_continuity.py)
+        # with the midpoint-density leap-frog, continuity runs after the drift (midpoint_continuity.py)
         self.continuity = num.leapfrog == Leapfrog.SEED
         self.viscous = viscous_stress_on(scene, materials)
         av = any(materials.av_alpha[k] > 0 or materials.av_beta[k] > 0 for k in water)

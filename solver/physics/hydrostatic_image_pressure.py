@@ -5,18 +5,25 @@ to a floor is supported (the seed's mirror image, sec. 2.5, carries only the sou
 from __future__ import annotations
 
 from ..config import kernel
+from ..fields import WATER_FRACTION
 from ..materials import Phase
 from ..scene import ImagePressure
 from ..term import Equation, Stage, Term
+from .tait_eos import saturated_mixture
 from .wall_images import static_increment
 
 
 @kernel
-def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p):
+def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p, fraction=None):
     """p_image = p_source + rho_source g . (x_image - x_source): the mirror pressure plus the
-    hydrostatic difference between the two points (numerics.image_pressure = "hydrostatic")."""
+    hydrostatic difference between the two points (numerics.image_pressure = "hydrostatic").
+    With `fraction` (pore water of apparent density n rho_w, docs/seepage.md) the increment uses
+    the intrinsic density rho / n: the pore pressure's hydrostatic gradient is rho_w g."""
     for k in range(src.shape[0]):
-        p[first + k] += static_increment(gravity, x, rho, first + k, src[k])
+        dp = static_increment(gravity, x, rho, first + k, src[k])
+        if fraction is not None:
+            dp /= fraction[src[k]]
+        p[first + k] += dp
 
 
 class HydrostaticImagePressure(Term):
@@ -28,11 +35,15 @@ class HydrostaticImagePressure(Term):
     @classmethod
     def build(cls, scene, materials):
         wanted = scene.numerics.image_pressure == ImagePressure.HYDROSTATIC
-        return cls() if wanted and materials.has_phase(Phase.WATER) and scene.walls.kinds() else None
+        return cls(scene) if wanted and materials.has_phase(Phase.WATER) and scene.walls.kinds() else None
 
-    def __init__(self):
+    def __init__(self, scene):
         super().__init__()
         self.reads = ("x", "rho", "p")
+        self.fraction = saturated_mixture(scene)  # pore water: increment from rho / n
+        if self.fraction:
+            self.fields = {"water_fraction": WATER_FRACTION}
+            self.reads += ("water_fraction",)
         self.equations = (
             Equation(
                 "p_image = p_source + rho_source g . (x_image - x_source)",
@@ -44,5 +55,6 @@ class HydrostaticImagePressure(Term):
         ps = ctx.particles
         if ps.n_image:
             add_hydrostatic_image_pressure(
-                ps.n_local, ctx.image_tables()[0], ps["x"], ps["rho"], ctx.gravity, ps["p"]
-            )
+                ps.n_local, ctx.image_tables()[0], ps["x"], ps["rho"], ctx.gravity, ps["p"],
+                ps["water_fraction"] if self.fraction else None,
+            )  # fmt: skip

@@ -1,0 +1,462 @@
+"""Impact pressure on the far wall of a dam break: Lobovsky et al. (2014), H = 300 mm.
+
+Experiment (verification/data/README.md): tank 1.61 m x 0.6 m, water column 0.6 m long and
+H = 0.3 m high against the left wall, released by a gate at t = 0; pressure sensors on the far
+wall with centres 3, 15, 30 and 80 mm above the floor, sampled at 20 kHz, 100 repetitions. Data:
+one repetition (event 5, sensors 1-4), the per-sample 2.5-97.5 % band over the repetitions at
+sensor 2, and the peak statistics (Table 2, second-hand). Model: 2D, free-slip walls, the gate
+ignored (the column is released at once, as every code we found does), water rho0 = 1000,
+c0 = 10 sqrt(2 g H) = 24.3 m/s (seed sec. 2.1), the solver's default numerics
+(numerics.scheme = "default"; the seed's scheme is one key away: run(..., scheme="seed")).
+
+Probe (what a sensor measures):
+  * value: the Shepard-normalised kernel average of p (verification/probes.py) at points of the
+    sensor face on the wall plane x = 1.61 m, over the fluid particles and their mirror images
+    across the far wall and the floor (as the solver's image particles are, with the hydrostatic
+    image increment when numerics.image_pressure = "hydrostatic");
+  * area: the face is a disc of diameter D_S; in 2D its chord weight sqrt(1 - (2 (y - y_c)/D_S)^2)
+    over [y_c - D_S/2, y_c + D_S/2] averages the probe along the wall. D_S = 4.2 mm is second-hand
+    (data README: not settled); at H/20 and H/40 the kernel support 2h = 39 and 20 mm is 5-10 times
+    wider, so the face average changes the probe by less than the kernel average already does;
+  * sampling: every time step (dt = 2e-4 s at H/20, 1e-4 s at H/40), interpolated to the sensors'
+    20 kHz, then a centred moving average of 1 ms, the same for SPH and experiment. On the measured
+    event 5 that filter moves the sensor-1 peak from 3.04 to 3.00 rho g H (1.3 %) and sensors 2-4 by
+    < 2 % (/work/coord/impact_design.md sec. 6); it removes the SPH's single-step acoustic spikes.
+
+Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
+  1. impact time: first t* at which the filtered p* at sensor 2 exceeds 0.5. Experimental range:
+     the times at which the band's 97.5 % and 2.5 % curves exceed 0.5 (2.441-2.491). The 2D model
+     has no gate, whose lift takes ~0.07 s = 0.4 in t* (data README): the model may arrive up to
+     0.4 earlier, never later; the window is [2.441 - 0.4, 2.491 + e], e the discretisation
+     allowance below.
+  2. plateau mean: mean filtered p* at sensor 2 over t* in [3.0, 5.5] against the band's median
+     averaged over the same window (0.614); tolerance: the band's half-width there (0.115, the
+     spread between repetitions) + e.
+  3. plateau noise: standard deviation of the filtered p* at sensor 2 over the window, against
+     the spread between repetitions (the band half-width, 0.115) + e: the swings the issue found
+     (-3 to +4 rho g H with the seed's scheme) must stay inside what repetitions of the experiment
+     differ by.
+  4. run health: no blow-up and zero specular wall reflections (issue 15).
+  The first-impact peak is reported, with its percentile rank in Table 2's band, and NOT checked:
+  at these resolutions it is the water hammer of a front one or two particles thick and it does not
+  converge between H/20 and H/40 (verification/results/impact_pressure/README.md); no defensible
+  tolerance exists for it yet.
+  e = the discretisation error at this resolution from the committed resolution study (H/20, H/40,
+  H/80; `allowance`): against the Richardson limit where the three converge monotonically, else the
+  first-order estimate from H/20 and H/40; 0 where no study row exists (the check is then as strict
+  as the data).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from solver.errors import BlowUpError
+from solver.kernels import kernel_values
+from solver.scene import parse_scene
+from solver.simulation import Simulation
+
+from .common import (
+    GCI_SAFETY,
+    RESULTS,
+    CaseResult,
+    Check,
+    case_main,
+    read_csv,
+    richardson,
+    save_figure,
+    save_study,
+    study_row,
+)
+
+H = 0.3
+G = 9.81
+RHO0 = 1000.0
+TANK = (1.61, 0.6)
+COLUMN = (0.6, 0.3)
+SENSORS_Y = (0.003, 0.015, 0.030, 0.080)  # m, sensor centres 1-4 (data README)
+SENSOR_DIAMETER = 0.0042  # m, second-hand (data README)
+FACE_POINTS = 5
+SAMPLE_RATE = 20000.0  # Hz, the sensors'
+FILTER = 1.0e-3  # s, centred moving average applied to SPH and experiment alike
+T_RECORD = 1.8  # t*: the probes are recorded from here (the surge reaches the wall at ~2.4)
+T_END = 5.6  # t*: end of the run (the plateau window ends at 5.5)
+PLATEAU = (3.0, 5.5)
+IMPACT_LEVEL = 0.5
+GATE = 0.4  # t*: gate lift time ~0.07 s (data README), one-sided: the model arrives early
+DEFAULT_RESOLUTION = 20  # particles over H
+STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
+STUDY = RESULTS / "impact_pressure" / "study.csv"
+TIME_SCALE = math.sqrt(H / G)
+
+
+def scene(resolution, end_star=T_END, **numerics):
+    dx = H / resolution
+    raw = {
+        "scene": {
+            "name": "lobovsky2014_h300",
+            "dimension": 2,
+            "spacing": dx,
+            "end_time": end_star * TIME_SCALE,
+            "gravity": [0.0, -G],
+        },
+        "domain": {"min": [0.0, 0.0], "max": list(TANK)},
+        "walls": {s: "free_slip" for s in ("x_min", "x_max", "y_min", "y_max")},
+        "materials": {
+            "water": {
+                "model": "water",
+                "density": RHO0,
+                "viscosity": 1.0e-3,
+                "typical_velocity": math.sqrt(2 * G * H),  # c = 10 sqrt(2 g H) (seed sec. 2.1)
+            }
+        },
+        "blocks": [
+            {
+                "name": "column",
+                "material": "water",
+                "shape": "rectangle",
+                "min": [0.0, 0.0],
+                "max": list(COLUMN),
+                "hydrostatic": True,
+            }
+        ],
+        "output": {
+            "interval": 0.01,
+            "fields": ["pressure"],
+            "vtk": False,
+            "render": False,
+            "render_field": "pressure",
+        },
+        "numerics": numerics,
+    }
+    return parse_scene(raw, "verification/impact_pressure.py")
+
+
+def face_points():
+    """Points and chord weights of each sensor face (a disc seen edge-on in 2D)."""
+    s = np.linspace(-1.0, 1.0, FACE_POINTS + 2)[1:-1]
+    w = np.sqrt(1.0 - s * s)
+    return [(yc + 0.5 * SENSOR_DIAMETER * s, w / w.sum()) for yc in SENSORS_Y]
+
+
+def wall_probe(sim, faces):
+    """Face-averaged p at each sensor: owned particles near the far wall and their images across
+    the far wall, the floor and the corner (pressure with the hydrostatic increment if the scene's
+    images carry it)."""
+    ps = sim.particles
+    n = ps.n_owned
+    x = ps["x"][:n]
+    xw = TANK[0]
+    reach = 2.0 * sim.h
+    near = x[:, 0] > xw - reach
+    if not near.any():
+        return np.zeros(len(faces))
+    xs, p, m, rho = x[near], ps["p"][:n][near], ps["mass"][:n][near], ps["rho"][:n][near]
+    hydro = sim.scene.numerics.image_pressure == "hydrostatic"
+    pts, pv = [xs], [p]
+    wall_img = xs * [-1.0, 1.0] + [2 * xw, 0.0]
+    pts.append(wall_img)
+    pv.append(p)
+    low = xs[:, 1] < reach
+    for src in (xs[low], wall_img[low]):
+        img = src * [1.0, -1.0]
+        pts.append(img)
+        pv.append(p[low] + (2.0 * rho[low] * G * src[:, 1] if hydro else 0.0))
+    pts = np.vstack(pts)
+    pv = np.concatenate(pv)
+    mm = np.concatenate([m, m, m[low], m[low]])
+    rr = np.concatenate([rho, rho, rho[low], rho[low]])
+    out = []
+    for ys, w in faces:
+        points = np.stack([np.full_like(ys, xw), ys], axis=1)
+        r = np.linalg.norm(points[:, None, :] - pts[None, :, :], axis=2)
+        k = kernel_values(r, sim.h, 2) * (mm / rr)[None, :]
+        total = k.sum(axis=1)
+        values = np.where(total > 0, (k @ pv) / np.where(total > 0, total, 1.0), 0.0)
+        out.append(float(w @ values))
+    return np.array(out)
+
+
+def filtered(t_star, p_star):
+    """Interpolate to the sensors' 20 kHz and apply the centred 1 ms moving average."""
+    dt_star = (1.0 / SAMPLE_RATE) / TIME_SCALE
+    grid = np.arange(t_star[0], t_star[-1], dt_star)
+    resampled = np.interp(grid, t_star, p_star)
+    width = max(1, int(round(FILTER * SAMPLE_RATE)))
+    kernel = np.ones(width) / width
+    return grid, np.convolve(resampled, kernel, mode="same"), resampled
+
+
+def impact_time(t_star, p_star):
+    above = np.flatnonzero(p_star > IMPACT_LEVEL)
+    return float(t_star[above[0]]) if len(above) else float("nan")
+
+
+def window_mean_sd(t_star, p_star):
+    w = (t_star >= PLATEAU[0]) & (t_star <= PLATEAU[1])
+    return float(np.mean(p_star[w])), float(np.std(p_star[w]))
+
+
+def experiment():
+    """Event 5 per sensor (t*, p*), the sensor-2 band (t*, lo, median, hi) and Table 2 peaks."""
+    events = []
+    for s in range(1, 5):
+        rows = read_csv(f"lobovsky2014_h300_event5_sensor{s}.csv")
+        events.append(
+            (np.array([float(r["t_star"]) for r in rows]), np.array([float(r["p_star"]) for r in rows]))
+        )
+    rows = read_csv("lobovsky2014_h300_sensor2_percentiles.csv")
+    band = tuple(np.array([float(r[k]) for r in rows]) for k in ("t_star", "p2_5", "median", "p97_5"))
+    rho_g_h_mbar = RHO0 * G * H / 100.0
+    peaks = [
+        {k: float(r[k]) / rho_g_h_mbar for k in ("median_mbar", "p2_5_mbar", "p97_5_mbar")}
+        for r in read_csv("lobovsky2014_h300_peak_statistics.csv")
+    ]
+    return events, band, peaks
+
+
+def band_statistics(band):
+    t, lo, med, hi = band
+    w = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
+    return {
+        "impact_earliest": impact_time(t, hi),
+        "impact_latest": impact_time(t, lo),
+        "plateau_median": float(np.mean(med[w])),
+        "plateau_half_width": float(0.5 * np.mean(hi[w] - lo[w])),
+    }
+
+
+def simulate(resolution, end_star=T_END, **numerics):
+    """Run the tank; returns (dict of series and counts, wall time of the stepping)."""
+    sc = scene(resolution, end_star, **numerics)
+    sim = Simulation(sc)
+    faces = face_points()
+    times, values = [], []
+    status = "completed"
+    sim.step()  # compiles every kernel
+    start = time.perf_counter()
+    try:
+        while sim.t < sc.scene.end_time * (1 - 1e-12):
+            sim.step(sc.scene.end_time - sim.t)
+            if sim.t / TIME_SCALE >= T_RECORD:
+                sim.current_state()
+                times.append(sim.t / TIME_SCALE)
+                values.append(wall_probe(sim, faces) / (RHO0 * G * H))
+    except BlowUpError as exc:
+        status = f"blew up: {exc}"
+    wall = time.perf_counter() - start
+    return {
+        "sim": sim,
+        "status": status,
+        "t_star": np.array(times),
+        "p_star": np.array(values).reshape(-1, len(SENSORS_Y)),
+        "reflections": sim.wall_reflections,
+        "steps": sim.step_count,
+        "particles": sim.particles.n_owned,
+        "scheme": sc.numerics.scheme.value,
+        "numerics": {
+            k: str(
+                getattr(sc.numerics, k).value
+                if hasattr(getattr(sc.numerics, k), "value")
+                else getattr(sc.numerics, k)
+            )
+            for k in ("leapfrog", "image_pressure", "density_diffusion", "wall_repulsion")
+        },
+    }, wall
+
+
+def metrics(run):
+    """The case's numbers from a simulate() result (filtered series, impact, plateau, peaks)."""
+    out = {"status": run["status"], "reflections": run["reflections"]}
+    t, p = run["t_star"], run["p_star"]
+    if len(t) < 2:
+        return out
+    for k in range(len(SENSORS_Y)):
+        grid, f, raw = filtered(t, p[:, k])
+        out[f"impact_s{k + 1}"] = impact_time(grid, f)
+        out[f"peak_s{k + 1}"] = float(f.max())
+        out[f"peak_raw_s{k + 1}"] = float(raw.max())
+        if grid[-1] >= PLATEAU[1] - 1e-9:
+            out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = window_mean_sd(grid, f)
+    return out
+
+
+def allowance(key, resolution):
+    """The discretisation error of metric `key` at `resolution`, from the committed study: with three
+    resolutions that converge monotonically, GCI_SAFETY |f - f0| against the Richardson limit f0
+    (Roache 1998; common.richardson); else, from H/20 and H/40, the first-order estimate (the error
+    halves with dx: e(H/40) = |f20 - f40|, e(H/20) = 2 |f20 - f40|); 0 without a study row."""
+    values = {}
+    for r in STUDY_RESOLUTIONS:
+        row = study_row(STUDY, r)
+        try:
+            values[r] = float(row[key]) if row is not None else float("nan")
+        except (KeyError, ValueError):
+            values[r] = float("nan")
+    finite = {r: v for r, v in values.items() if np.isfinite(v)}
+    if resolution not in finite:
+        return 0.0
+    if len(finite) >= 3:
+        fit = richardson([H / r for r in finite], list(finite.values()))
+        if fit is not None:
+            return GCI_SAFETY * abs(finite[resolution] - fit[1])
+    if 20 in finite and 40 in finite and resolution in (20, 40):
+        return (2.0 if resolution == 20 else 1.0) * abs(finite[20] - finite[40])
+    return 0.0
+
+
+def band_of(stats):
+    return stats["p2_5_mbar"], stats["median_mbar"], stats["p97_5_mbar"]
+
+
+def percentile_rank(value, lo, med, hi):
+    """Where a value lies in the 2.5-50-97.5 % band, by linear interpolation between those points."""
+    if value < lo:
+        return "below 2.5 %"
+    if value > hi:
+        return "above 97.5 %"
+    if value <= med:
+        return f"{2.5 + 47.5 * (value - lo) / (med - lo):.0f} %"
+    return f"{50 + 47.5 * (value - med) / (hi - med):.0f} %"
+
+
+def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="default", **numerics):
+    numerics = {"scheme": scheme, **numerics}
+    sim_run, wall = simulate(resolution, **numerics)
+    m = metrics(sim_run)
+    events, band, peaks = experiment()
+    ref = band_statistics(band)
+    res = CaseResult(
+        case="impact_pressure",
+        resolution=resolution,
+        particles=sim_run["particles"],
+        steps=sim_run["steps"],
+        wall_time=wall,
+        series={"run": sim_run, "metrics": m, "reference": ref},
+    )
+    finished = sim_run["status"] == "completed"
+    res.checks.append(
+        Check(
+            "run completed without blow-up (0 = yes)",
+            0.0 if finished else 1.0,
+            0.0,
+            "issue 15: impacts must hold",
+        )
+    )
+    res.checks.append(
+        Check(
+            "specular wall reflections", float(sim_run["reflections"]), 0.0, "issue 15: walls hold without it"
+        )
+    )
+    e_imp = allowance("impact_s2", resolution)
+    t_imp = m.get("impact_s2", float("nan"))
+    lo_t, hi_t = ref["impact_earliest"] - GATE, ref["impact_latest"] + e_imp
+    outside = max(t_imp - hi_t, lo_t - t_imp, 0.0) if np.isfinite(t_imp) else float("nan")
+    res.checks.append(
+        Check(
+            f"impact time t* at sensor 2 outside [{lo_t:.3f}, {hi_t:.3f}] by (t* = {t_imp:.3f})",
+            outside,
+            0.0,
+            "band of the repetitions (2.5-97.5 %, Lobovsky et al. 2014) widened by the gate lift 0.4 t* "
+            f"(model early only) and the discretisation allowance {e_imp:.3f}",
+        )
+    )
+    e_mean = allowance("plateau_mean_s2", resolution)
+    res.checks.append(
+        Check(
+            "plateau mean p* at sensor 2, t* 3-5.5, minus the band median",
+            m.get("plateau_mean_s2", float("nan")) - ref["plateau_median"],
+            ref["plateau_half_width"] + e_mean,
+            f"half-width of the repetitions' band ({ref['plateau_half_width']:.3f}) "
+            f"+ discretisation {e_mean:.3f}",
+        )
+    )
+    e_sd = allowance("plateau_sd_s2", resolution)
+    res.checks.append(
+        Check(
+            "plateau noise: sd of the 1 ms-filtered p* at sensor 2, t* 3-5.5",
+            m.get("plateau_sd_s2", float("nan")),
+            ref["plateau_half_width"] + e_sd,
+            "the spread between repetitions (band half-width) + discretisation "
+            f"{e_sd:.3f}; measured event 5: 0.050",
+        )
+    )
+    for k, stats in enumerate(peaks[:3]):
+        peak = m.get(f"peak_s{k + 1}", float("nan"))
+        res.notes.append(
+            f"sensor {k + 1} first-impact peak (1 ms filter) {peak:.2f} rho g H, Table 2 median "
+            f"{stats['median_mbar']:.2f}, band {stats['p2_5_mbar']:.2f}-{stats['p97_5_mbar']:.2f} "
+            f"(rank: {percentile_rank(peak, *band_of(stats))}); "
+            "not checked: it does not converge at these resolutions"
+        )
+    res.notes.append(
+        f"numerics: scheme {sim_run['scheme']}, "
+        + ", ".join(f"{k} = {v}" for k, v in sim_run["numerics"].items())
+    )
+    if out_dir is not None:
+        res.figure = plot(sim_run, events, band, Path(out_dir) / f"impact_pressure_r{resolution}.png")
+    return res
+
+
+def plot(sim_run, events, band, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    t, p = sim_run["t_star"], sim_run["p_star"]
+    for k, ax in enumerate(axes.flat):
+        te, pe = events[k]
+        ge, fe, _ = filtered(te, pe)
+        ax.plot(ge, fe, color="0.4", lw=0.8, label="experiment, event 5 (1 ms filter)")
+        if k == 1:
+            bt, lo, _, hi = band
+            ax.fill_between(bt, lo, hi, color="0.85", label="2.5-97.5 % of the repetitions")
+        if len(t) > 1:
+            g, f, _ = filtered(t, p[:, k])
+            ax.plot(g, f, color="C0", lw=1.0, label="SPH (face average, 1 ms filter)")
+        ax.set_title(f"sensor {k + 1}, y = {SENSORS_Y[k] * 1000:g} mm")
+        ax.set_xlim(T_RECORD, T_END)
+        ax.set_ylim(-0.5, 4.0 if k == 0 else 2.5)
+        ax.set_ylabel("p / (rho g H)")
+        if k >= 2:
+            ax.set_xlabel("t sqrt(g/H)")
+        if k == 1:
+            ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle(
+        f"Lobovsky et al. (2014), H = 300 mm: {sim_run['status']}, {sim_run['reflections']} reflections"
+    )
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS / "impact_pressure", **numerics):
+    """Resolution study: metrics and wall time per resolution (committed in verification/results)."""
+    from .common import machine_load
+
+    rows = []
+    for r in resolutions:
+        res = run(r, out_dir=out_dir, **numerics)
+        m = res.series["metrics"]
+        row = {
+            "resolution": r,
+            "particles": res.particles,
+            "steps": res.steps,
+            "wall_s": round(res.wall_time, 1),
+        }
+        for key in ("status", "reflections", "impact_s1", "impact_s2", "peak_s1", "peak_s2", "peak_s3",
+                    "plateau_mean_s1", "plateau_mean_s2", "plateau_sd_s1", "plateau_sd_s2"):  # fmt: skip
+            row[key] = m.get(key, float("nan"))
+        row["load"] = machine_load()
+        rows.append(row)
+    save_study(rows, out_dir, "study")
+    return rows
+
+
+if __name__ == "__main__":
+    raise SystemExit(case_main(__import__(__name__)))
