@@ -1,7 +1,8 @@
 """The command line: `scoursph run SCENE`, `scoursph verify CASE`.
 
 Exit status: 0 success, 1 numerical blow-up (outputs so far are kept) or a failed
-verification check, 2 bad input (scene file, option or output directory; nothing written).
+verification check, 2 bad input (scene file, option, output directory or restart; nothing
+written), 130 / 143 stopped by SIGINT / SIGTERM after writing a checkpoint (128 + the signal).
 Every error is one line on standard error, starting "scoursph: error:".
 """
 
@@ -44,6 +45,13 @@ def _parser():
         "--overwrite",
         action="store_true",
         help="replace an earlier run in the output directory (only the files a run writes are removed)",
+    )
+    r.add_argument(
+        "--restart",
+        type=Path,
+        metavar="RUN_DIR",
+        help="continue the run in RUN_DIR from its newest checkpoint, or from "
+        "RUN_DIR/checkpoints/NNNNNNNNN.h5; outputs continue in RUN_DIR",
     )
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -122,15 +130,31 @@ def _run(args):
         if comm.is_root():
             print(explain(build_plan(scene), scene))
         return 0
+    from solver.interrupt import Interrupted
+    from solver.output.checkpoint import CheckpointError
     from solver.run import run_scene
 
     out = args.out or Path("runs") / scene.scene.name
+    if args.restart is not None and (args.overwrite or args.out is not None):
+        if comm.is_root():
+            _fail("--restart continues in the run's own directory: it takes no --out or --overwrite", 2)
+        return 2
     try:
-        result = run_scene(scene, out, comm=comm, quiet=args.quiet, overwrite=args.overwrite)
+        result = run_scene(
+            scene, out, comm=comm, quiet=args.quiet, overwrite=args.overwrite, restart=args.restart
+        )
     except RunDirError as exc:
         if comm.is_root():
             _fail(f"--out {exc}", 2)
         return 2
+    except CheckpointError as exc:
+        if comm.is_root():
+            _fail(f"--restart {exc}", 2)
+        return 2
+    except Interrupted as exc:
+        if comm.is_root():
+            _interrupted(exc, args.scene, args.restart or out)
+        return exc.status
     except BlowUpError as exc:
         if comm.is_root():
             _fail(f"{exc}; outputs written so far are kept in {out}/", 1)
@@ -141,11 +165,25 @@ def _run(args):
             "wall, "
             f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s"
         )
+        out = result.out_dir  # a restart's is the run directory it continues
         print(
             f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, "
             "scene.toml, run.json"
         )
     return 0
+
+
+def _interrupted(exc, scene_arg, run_dir):
+    """The one line a stopped run leaves on standard error."""
+    if exc.checkpoint is not None:
+        resume = f"scoursph run {scene_arg} --restart {run_dir}"
+        how = f"checkpoint written to {exc.checkpoint}; resume with {resume}"
+    elif exc.error is not None:
+        how = f"no checkpoint written ({exc.error}); the earlier ones in {run_dir} remain"
+    else:
+        how = "no checkpoint (outputs not written)"
+    at = f"at t = {exc.t:.6g} s (step {exc.step})"
+    print(f"scoursph: interrupted by {exc.signame} {at}; {how}", file=sys.stderr)
 
 
 # Resident memory per particle measured for the 2D dam break (README "Speed"): a lower bound,
