@@ -628,6 +628,7 @@ def _refusal(exc: ValidationError, path, prefix=()) -> SceneError:
 def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
     merged = deep_merge(defaults, raw)
+    _default_fields_for_the_phases(raw, merged)
     for table in ("material_defaults", "artificial_viscosity_defaults"):
         # checked before they are filled in, so an error names the key the user wrote
         model = MaterialDefaults if table == "material_defaults" else Scene.model_fields[table].annotation
@@ -640,6 +641,19 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
         return Scene.model_validate(_fill_material_defaults(merged))
     except ValidationError as exc:
         raise _refusal(exc, path) from None
+
+
+def _default_fields_for_the_phases(raw: dict, merged: dict):
+    """The default output fields include the water pressure; a scene without water that did not
+    choose its fields gets the defaults without it (choosing 'pressure' there is refused)."""
+    chose = isinstance(raw.get("output"), dict) and "fields" in raw["output"]
+    materials = merged.get("materials")
+    if chose or not isinstance(materials, dict) or not isinstance(merged.get("output"), dict):
+        return
+    if not any(isinstance(m, dict) and m.get("model") == "water" for m in materials.values()):
+        fields = merged["output"].get("fields")
+        if isinstance(fields, list):
+            merged["output"]["fields"] = [f for f in fields if f != "pressure"]
 
 
 def pydantic_validate(model, value):

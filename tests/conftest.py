@@ -36,8 +36,8 @@ NIGHTLY = os.environ.get("SCOURSPH_NIGHTLY") == "1"
 
 
 def pytest_collection_modifyitems(config, items):
-    """Tests marked `nightly` (the full fuzzer) run with SCOURSPH_NIGHTLY=1 or `pytest -m nightly`;
-    `make test` skips them and says why."""
+    """Tests marked `nightly` (the full fuzzer, the whole stability matrix, long studies) run with
+    SCOURSPH_NIGHTLY=1 or `pytest -m nightly`; `make test` skips them and says why."""
     if NIGHTLY or "nightly" in (config.option.markexpr or ""):
         return
     skip = pytest.mark.skip(
