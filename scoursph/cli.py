@@ -50,8 +50,15 @@ def _parser():
         "--restart",
         type=Path,
         metavar="RUN_DIR",
-        help="continue the run in RUN_DIR from its newest checkpoint, or from "
-        "RUN_DIR/checkpoints/NNNNNNNNN.h5; outputs continue in RUN_DIR",
+        help="continue the run in RUN_DIR from its newest readable checkpoint (or the one --checkpoint "
+        "names); outputs continue in RUN_DIR. SCENE must be the run's scene (scene.end_time, output.* and "
+        "parallel.* may change)",
+    )
+    r.add_argument(
+        "--checkpoint",
+        metavar="NAME",
+        help="with --restart: the checkpoint to continue from, by file name in RUN_DIR/checkpoints/ "
+        "(000001234.h5) or step number (1234); later checkpoints of that run are removed",
     )
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -139,9 +146,19 @@ def _run(args):
         if comm.is_root():
             _fail("--restart continues in the run's own directory: it takes no --out or --overwrite", 2)
         return 2
+    if args.checkpoint is not None and args.restart is None:
+        if comm.is_root():
+            _fail(f"--checkpoint {args.checkpoint}: it names a checkpoint of --restart RUN_DIR, which is missing", 2)
+        return 2
     try:
         result = run_scene(
-            scene, out, comm=comm, quiet=args.quiet, overwrite=args.overwrite, restart=args.restart
+            scene,
+            out,
+            comm=comm,
+            quiet=args.quiet,
+            overwrite=args.overwrite,
+            restart=args.restart,
+            checkpoint=args.checkpoint,
         )
     except RunDirError as exc:
         if comm.is_root():
@@ -155,6 +172,12 @@ def _run(args):
         if comm.is_root():
             _interrupted(exc, args.scene, args.restart or out)
         return exc.status
+    except KeyboardInterrupt:  # a second SIGINT (interrupt.py): stop now, without a checkpoint
+        message = "stopped at once by a second SIGINT: no checkpoint written (earlier ones remain)"
+        if comm.size > 1:  # the other ranks may wait in a collective: end them all
+            comm.abort(message, 130)
+        _fail(message, 130)
+        return 130
     except BlowUpError as exc:
         if comm.is_root():
             _fail(f"{exc}; outputs written so far are kept in {out}/", 1)

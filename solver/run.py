@@ -116,17 +116,24 @@ def _on_root(action, out_dir, comm):
 
 
 def run_scene(
-    scene: Scene, out_dir, comm=None, quiet=False, write=True, overwrite=False, restart=None
+    scene: Scene, out_dir, comm=None, quiet=False, write=True, overwrite=False, restart=None, checkpoint=None
 ) -> RunResult:
     """Run a scene; with `write`, into out_dir (refused with RunDirError, before any set-up,
     if it is not empty and not an earlier run, or is an earlier run and not `overwrite`).
-    `restart`: a run directory or one of its checkpoints to continue from (output/checkpoint.py;
-    CheckpointError if it cannot be, before anything is written); out_dir is then that run's."""
+    `restart`: a run directory to continue from, at its newest checkpoint or the one `checkpoint`
+    names (output/checkpoint.py; CheckpointError if it cannot be, before anything is written);
+    out_dir is then that run's. SIGINT and SIGTERM, from the start (a signal during the set-up
+    is acted on after the first step), end the run with a checkpoint: Interrupted (interrupt.py)."""
     comm = comm or SerialCommunicator()
+    with StopSignals(announce=comm.is_root()) as stops:
+        return _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoint, stops)
+
+
+def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoint, stops) -> RunResult:
     scene_json = json.dumps(scene.model_dump(mode="json"))
     resume = None
     if restart is not None:
-        out_dir, resume = open_restart(restart, scene, scene_json, comm)  # the checkpoint, this rank's part
+        out_dir, resume = open_restart(restart, scene, scene_json, comm, checkpoint)  # the checkpoint, this rank's part
     out_dir = Path(out_dir)
     mode = "continue" if resume else "overwrite" if overwrite else "new"
     if write:  # refused before any work: writes nothing
@@ -186,7 +193,6 @@ def run_scene(
                 w.write(sim.t, sim.step_count, fields)
 
     progress = Progress(scene.scene.end_time, enabled=not quiet and comm.is_root(), first_step=sim.step_count)
-    stops = StopSignals(announce=comm.is_root())
     checkpoints = Checkpointer(
         scene.output, out_dir, comm, scene_json, run_state, stops=stops, enabled=write, t=sim.t
     )
@@ -203,13 +209,12 @@ def run_scene(
     status = "completed"
     t0 = time.perf_counter()
     try:
-        with stops:
-            for t_out in times:
-                target[0] = t_out
-                sim.advance_to(t_out, on_step=on_step)
-                snapshot()
-                checkpoints.after_step(sim)
-            checkpoints.at_end(sim)
+        for t_out in times:
+            target[0] = t_out
+            sim.advance_to(t_out, on_step=on_step)
+            snapshot()
+            checkpoints.after_step(sim)
+        checkpoints.at_end(sim)
     except BlowUpError as exc:
         status = f"blew up: {exc}"
         raise

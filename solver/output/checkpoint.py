@@ -236,27 +236,42 @@ def read_header(path) -> dict:
                 raise CheckpointError(path, "is incomplete (no particle data)")
     except OSError as exc:
         raise CheckpointError(path, f"cannot be read as HDF5 ({exc})") from None
-    attrs["state"] = json.loads(attrs["state"])
-    attrs["scene"] = json.loads(attrs["scene"])
+    try:
+        attrs["state"] = json.loads(attrs["state"])
+        attrs["scene"] = json.loads(attrs["scene"])
+        for key in ("t", "step", "ranks"):
+            float(attrs[key])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CheckpointError(path, f"has a damaged header ({type(exc).__name__}: {exc})") from None
     return attrs
 
 
-def find_checkpoint(arg) -> tuple[Path, Path, list[str]]:
-    """(run directory, checkpoint file, warnings) for `--restart ARG`: a run directory (its
-    newest readable checkpoint; unreadable newer ones are named in the warnings) or a checkpoint
-    file inside a run directory's checkpoints/ folder."""
+def find_checkpoint(arg, name=None) -> tuple[Path, Path, list[str]]:
+    """(run directory, checkpoint file, warnings) for `--restart ARG [--checkpoint NAME]`: the run
+    directory's newest readable checkpoint (unreadable newer ones are named in the warnings), or
+    the one NAME gives (a file name in its checkpoints/ folder, or a step number). ARG may also
+    be a checkpoint file inside a run directory's checkpoints/ folder."""
     path = Path(arg)
     if path.is_file():
         run_dir = path.parent.parent
         if path.parent.name != FOLDER or not NAME.fullmatch(path.name) or not (run_dir / MARKER).is_file():
             raise CheckpointError(path, f"is not a checkpoint in a run directory's {FOLDER}/ folder")
+        if name is not None:
+            raise CheckpointError(path, "is a checkpoint file already: --checkpoint needs a run directory")
         read_header(path)
         return run_dir, path, []
     if not path.is_dir():
-        raise CheckpointError(path, "no such run directory or checkpoint file")
+        raise CheckpointError(path, "no such run directory")
     if not (path / MARKER).is_file():
         raise CheckpointError(path, f"is not a ScourSPH run directory (no {MARKER} marker)")
     found = list_checkpoints(path)
+    if name is not None:
+        chosen = path / FOLDER / _file_name(name)
+        if chosen not in found:
+            have = ", ".join(p.name for p in found) or "none"
+            raise CheckpointError(chosen, f"no such checkpoint (--checkpoint {name}; the run has: {have})")
+        read_header(chosen)
+        return path, chosen, []
     if not found:
         raise CheckpointError(
             path,
@@ -272,6 +287,13 @@ def find_checkpoint(arg) -> tuple[Path, Path, list[str]]:
             continue
         return path, candidate, warnings
     raise CheckpointError(path, "none of its checkpoints is readable: " + "; ".join(warnings))
+
+
+def _file_name(name) -> str:
+    """A checkpoint's file name from --checkpoint: 000001234.h5, 000001234 or 1234."""
+    text = str(name).strip()
+    stem = text[:-3] if text.endswith(".h5") else text
+    return f"{int(stem):09d}.h5" if stem.isdigit() else text
 
 
 def scene_differences(old, new, prefix="") -> list[tuple[str, object, object]]:
@@ -317,15 +339,15 @@ def _short(v):
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def open_restart(arg, scene, scene_json, comm):
-    """(run directory, Resume) for `--restart ARG`, on every rank: the root finds the checkpoint
-    and checks the scene against it; a CheckpointError is raised on every rank alike."""
+def open_restart(arg, scene, scene_json, comm, name=None):
+    """(run directory, Resume) for `--restart ARG [--checkpoint NAME]`, on every rank: the root finds
+    the checkpoint and checks the scene against it; a CheckpointError is raised on every rank alike."""
     from ..plan import build_plan
 
     found, error = None, None
     if comm.is_root():
         try:
-            run_dir, path, warnings = find_checkpoint(arg)
+            run_dir, path, warnings = find_checkpoint(arg, name)
             header = read_header(path)
             check_scene(path, header, scene_json)
             found = (str(run_dir), str(path), header)
