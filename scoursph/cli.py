@@ -172,11 +172,8 @@ def _run(args):
         if comm.is_root():
             _interrupted(exc, args.scene, args.restart or out)
         return exc.status
-    except KeyboardInterrupt:  # a second SIGINT (interrupt.py): stop now, without a checkpoint
-        message = "stopped at once by a second SIGINT: no checkpoint written (earlier ones remain)"
-        if comm.size > 1:  # the other ranks may wait in a collective: end them all
-            comm.abort(message, 130)
-        _fail(message, 130)
+    except KeyboardInterrupt:  # a second SIGINT, serial (interrupt.py; MPI aborts): no checkpoint
+        _fail("stopped at once by a second SIGINT: no checkpoint written (earlier ones remain)", 130)
         return 130
     except BlowUpError as exc:
         if comm.is_root():

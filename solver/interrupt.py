@@ -42,9 +42,12 @@ class StopSignals:
     """Records SIGINT/SIGTERM while installed (a context manager); `pending` is the signal
     number or 0. Only the main thread can install handlers: elsewhere this does nothing."""
 
-    def __init__(self, announce=True):
+    def __init__(self, announce=True, on_second=None):
+        """`on_second(signum)`: what a second signal does instead of the default (under MPI: end
+        every rank through MPI_Abort, as the other ranks may wait in a collective)."""
         self.pending = 0
         self.announce = announce
+        self.on_second = on_second
         self._old = {}
 
     def __enter__(self):
@@ -61,6 +64,8 @@ class StopSignals:
     def _handler(self, signum, frame):
         if self.pending:  # the second one: stop now, as if no handler were installed
             self.__exit__()
+            if self.on_second is not None:
+                self.on_second(signum)
             if signum == signal.SIGINT:
                 raise KeyboardInterrupt
             os.kill(os.getpid(), signum)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import signal
 import platform
 import sys
 import time
@@ -21,7 +22,7 @@ import numpy as np
 
 from . import __version__
 from .errors import BlowUpError
-from .interrupt import Interrupted, StopSignals
+from .interrupt import Interrupted, StopSignals, exit_status
 from .output.atomic import atomic_write_text
 from .output.checkpoint import Checkpointer, open_restart, resume_outputs
 from .output.fields import OUTPUT_TO_ARRAY, requested_fields
@@ -125,7 +126,14 @@ def run_scene(
     out_dir is then that run's. SIGINT and SIGTERM, from the start (a signal during the set-up
     is acted on after the first step), end the run with a checkpoint: Interrupted (interrupt.py)."""
     comm = comm or SerialCommunicator()
-    with StopSignals(announce=comm.is_root()) as stops:
+    second = None
+    if comm.size > 1:  # a second signal ends every rank at once (some may wait in a collective)
+
+        def second(signum):
+            name = signal.Signals(signum).name
+            comm.abort(f"stopped at once by a second {name}: no checkpoint written", exit_status(signum))
+
+    with StopSignals(announce=comm.is_root(), on_second=second) as stops:
         return _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoint, stops)
 
 
