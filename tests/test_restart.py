@@ -83,7 +83,7 @@ def _snapshots(run):
 def _checkpoint_state(path):
     with h5py.File(path, "r") as f:
         particles = {name: f["particles"][name][:] for name in f["particles"]}
-        state = json.loads(f.attrs["state"])
+        state = json.loads(f["meta/state"][()])
     return particles, state
 
 

@@ -1,8 +1,8 @@
 """Checkpoints: the whole state of a run in one HDF5 file, from which it continues bit for bit.
 
     RUN/checkpoints/NNNNNNNNN.h5         NNNNNNNNN = the step number
-      attrs: format, format_version, solver_version, t, step, ranks, created,
-             scene (the merged scene, JSON), state (JSON, below)
+      attrs: format, format_version, solver_version, t, step, ranks, particles, created
+      /meta/scene, /meta/state           the merged scene and the state below (JSON texts)
       /particles/<field>                 every particle field of every owned particle (half-step
                                          values, rates, stresses, plastic strain, x_ref, ids,
                                          ...), sorted by global id
@@ -184,6 +184,9 @@ def write_checkpoint(run_dir, sim, comm, scene_json, run_state) -> Path:
             "terms": [p["terms"] for p in per_rank],
             "run": run_state,
         }
+        # datasets, not attributes: an attribute holds at most 64 KiB, and the run's record grows
+        writer.put("meta/scene", scene_json)
+        writer.put("meta/state", to_json(state))
         writer.finish(
             {
                 "format": FORMAT,
@@ -194,8 +197,6 @@ def write_checkpoint(run_dir, sim, comm, scene_json, run_state) -> Path:
                 "ranks": int(comm.size),
                 "particles": int(len(order)),
                 "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                "scene": scene_json,
-                "state": to_json(state),
             }
         )
     error = comm.bcast(writer.error if writer is not None else None)
@@ -232,13 +233,15 @@ def read_header(path) -> dict:
                     f"has checkpoint format {attrs.get('format_version')}, this solver reads "
                     f"{FORMAT_VERSION}",
                 )
-            if "particles" not in f or "layout" not in f:
+            if "particles" not in f or "layout" not in f or "meta" not in f:
                 raise CheckpointError(path, "is incomplete (no particle data)")
+            texts = {k: f["meta"][k][()] for k in ("scene", "state") if k in f["meta"]}
     except OSError as exc:
         raise CheckpointError(path, f"cannot be read as HDF5 ({exc})") from None
     try:
-        attrs["state"] = json.loads(attrs["state"])
-        attrs["scene"] = json.loads(attrs["scene"])
+        for k in ("scene", "state"):
+            text = texts[k]
+            attrs[k] = json.loads(text.decode() if isinstance(text, bytes) else text)
         for key in ("t", "step", "ranks"):
             float(attrs[key])
     except (KeyError, TypeError, ValueError) as exc:
