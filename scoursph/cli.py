@@ -9,6 +9,7 @@ Every error is one line on standard error, starting "scoursph: error:".
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -146,9 +147,16 @@ def _run(args):
         if comm.is_root():
             _fail("--restart continues in the run's own directory: it takes no --out or --overwrite", 2)
         return 2
+    run_dir = out
+    if args.restart is not None:  # the run directory, also when --restart names a checkpoint file
+        run_dir = args.restart.parent.parent if args.restart.is_file() else args.restart
     if args.checkpoint is not None and args.restart is None:
         if comm.is_root():
-            _fail(f"--checkpoint {args.checkpoint}: it names a checkpoint of --restart RUN_DIR, which is missing", 2)
+            _fail(
+                f"--checkpoint {args.checkpoint}: it names a checkpoint of --restart RUN_DIR, "
+                "which is missing",
+                2,
+            )
         return 2
     try:
         result = run_scene(
@@ -170,14 +178,14 @@ def _run(args):
         return 2
     except Interrupted as exc:
         if comm.is_root():
-            _interrupted(exc, args.scene, args.restart or out)
+            _interrupted(exc, args, run_dir)
         return exc.status
     except KeyboardInterrupt:  # a second SIGINT, serial (interrupt.py; MPI aborts): no checkpoint
         _fail("stopped at once by a second SIGINT: no checkpoint written (earlier ones remain)", 130)
         return 130
     except BlowUpError as exc:
         if comm.is_root():
-            _fail(f"{exc}; outputs written so far are kept in {out}/", 1)
+            _fail(f"{exc}; outputs written so far are kept in {run_dir}/", 1)
         return 1
     if comm.is_root():
         print(
@@ -193,10 +201,11 @@ def _run(args):
     return 0
 
 
-def _interrupted(exc, scene_arg, run_dir):
-    """The one line a stopped run leaves on standard error."""
+def _interrupted(exc, args, run_dir):
+    """The one line a stopped run leaves on standard error (with the command that resumes it)."""
     if exc.checkpoint is not None:
-        resume = f"scoursph run {scene_arg} --restart {run_dir}"
+        sets = "".join(f" --set {shlex.quote(s)}" for s in args.set)
+        resume = f"scoursph run {shlex.quote(str(args.scene))}{sets} --restart {shlex.quote(str(run_dir))}"
         how = f"checkpoint written to {exc.checkpoint}; resume with {resume}"
     elif exc.error is not None:
         how = f"no checkpoint written ({exc.error}); the earlier ones in {run_dir} remain"

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import datetime
 import json
-import signal
 import platform
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -141,7 +141,9 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
     scene_json = json.dumps(scene.model_dump(mode="json"))
     resume = None
     if restart is not None:
-        out_dir, resume = open_restart(restart, scene, scene_json, comm, checkpoint)  # the checkpoint, this rank's part
+        out_dir, resume = open_restart(
+            restart, scene, scene_json, comm, checkpoint
+        )  # the checkpoint, this rank's part
     out_dir = Path(out_dir)
     mode = "continue" if resume else "overwrite" if overwrite else "new"
     if write:  # refused before any work: writes nothing

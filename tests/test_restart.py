@@ -356,7 +356,11 @@ def test_signal_writes_a_checkpoint_and_the_restart_matches(tmp_path, one_thread
     run_scene(load_scene(scene_path), ref, quiet=True)
     run = tmp_path / "run"
     proc = subprocess.Popen(
-        _cli(scene_path, "--out", run), stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=_env()
+        _cli(scene_path, "--out", run),
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        env=_env(),
     )
     try:
         end = time.monotonic() + 90

@@ -83,7 +83,10 @@ def assert_within_roundoff(serial_run, other_run):
         worst["x"] = max(worst["x"], float(np.abs(fs["position"] - fo["position"]).max()))
         worst["v"] = max(worst["v"], float(np.abs(fs["velocity"] - fo["velocity"]).max()))
         worst["rho"] = max(worst["rho"], float(np.abs(fs["density"] - fo["density"]).max()))
-    print(f"restart across rank counts: worst |difference| {worst}, bounds {tol_x:.3g} {tol_v:.3g} {tol_rho:.3g}")
+    print(
+        f"restart across rank counts: worst |difference| {worst}, "
+        f"bounds {tol_x:.3g} {tol_v:.3g} {tol_rho:.3g}"
+    )
     assert worst["x"] <= tol_x and worst["v"] <= tol_v and worst["rho"] <= tol_rho, worst
 
 

@@ -48,7 +48,7 @@ class VtkSeries:
         rel = f"vtk/{len(self.entries):06d}.vtp"
         with atomic_path(self.out / rel) as tmp:
             particles_polydata(fields).save(tmp)
-        self.entries.append((t, rel))
+        self.entries.append((float(t), rel))  # a NumPy scalar's repr is "np.float64(...)": not for ParaView
         self._write_collection()
 
     def _write_collection(self):
