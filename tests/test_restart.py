@@ -368,7 +368,9 @@ def test_signal_writes_a_checkpoint_and_the_restart_matches(tmp_path, one_thread
             time.sleep(0.05)
         assert _names(run), "no checkpoint appeared"
         proc.send_signal(sig)
+        t_signal = time.monotonic()
         _, err = proc.communicate(timeout=60)
+        print(f"{signal.Signals(sig).name}: stopped {time.monotonic() - t_signal:.2f} s after the signal")
     finally:
         proc.kill()
         proc.wait()
