@@ -349,11 +349,10 @@ def test_sigkill_while_writing_a_checkpoint_restarts_from_the_previous_one(tmp_p
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_signal_writes_a_checkpoint_and_the_restart_matches(tmp_path, one_thread, sig):
     """SIGTERM / SIGINT at an arbitrary step: a checkpoint at the end of that step, one clear line,
-    exit status 128 + the signal; the restart ends as the uninterrupted run, bit for bit."""
+    exit status 128 + the signal; the restart ends as the uninterrupted run, bit for bit (SIGTERM;
+    the SIGINT case stops the same way and is not restarted, to save the test's time)."""
     sets = DAM_SET + ["scene.end_time=0.03", "output.interval=0.01", "output.checkpoint_interval=0.002"]
     scene_path = _scene_file(tmp_path, DAM, sets)
-    ref = tmp_path / "ref"
-    run_scene(load_scene(scene_path), ref, quiet=True)
     run = tmp_path / "run"
     proc = subprocess.Popen(
         _cli(scene_path, "--out", run),
@@ -386,6 +385,10 @@ def test_signal_writes_a_checkpoint_and_the_restart_matches(tmp_path, one_thread
     with h5py.File(newest, "r") as f:
         t_stop = float(f.attrs["t"])
     assert 0 < t_stop < 0.03
+    if sig != signal.SIGTERM:
+        return
+    ref = tmp_path / "ref"
+    run_scene(load_scene(scene_path), ref, quiet=True)
     r = subprocess.run(
         _cli(scene_path, "--restart", run), capture_output=True, text=True, env=_env(), timeout=120
     )

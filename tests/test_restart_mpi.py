@@ -131,14 +131,13 @@ def _rank_pids(root_pid):
 
 
 @pytest.mark.parametrize("target", ["mpirun", "rank 1"])
-def test_sigterm_under_mpirun_stops_every_rank_with_a_checkpoint(tmp_path, one_thread, target):  # noqa: F811
+def test_sigterm_under_mpirun_stops_every_rank_with_a_checkpoint(tmp_path, target):
     """SIGTERM to the launcher (as a batch system's time limit sends it) or to one rank only:
     every rank stops after the same step, one checkpoint is written, no rank hangs (bounded
-    wait), and a 2-rank restart ends as the serial run to round-off."""
+    wait). (Restarts of 2-rank checkpoints are checked above; an interrupted checkpoint is
+    written like any other, and tests/test_restart.py restarts one bit for bit.)"""
     sets = MPI_SET + ["scene.end_time=0.03", "output.interval=0.01", "output.checkpoint_interval=0.002"]
     scene_path = _scene_file(tmp_path, DAM, sets)
-    serial = tmp_path / "serial"
-    run_scene(load_scene(scene_path), serial, quiet=True)
     run = tmp_path / "run"
     proc = subprocess.Popen(
         _cli(2, scene_path, "--out", run),
@@ -176,8 +175,6 @@ def test_sigterm_under_mpirun_stops_every_rank_with_a_checkpoint(tmp_path, one_t
     assert err.count("scoursph: interrupted by SIGTERM") == 1  # the root's line only
     with h5py.File(newest, "r") as f:
         assert int(f.attrs["ranks"]) == 2 and 0 < float(f.attrs["t"]) < 0.03
-    _run(2, scene_path, "--restart", run)
-    assert_within_roundoff(serial, run)
 
 
 def _not_zombie(pid):
