@@ -1,13 +1,15 @@
 """The command line: `scoursph run SCENE`, `scoursph verify CASE`.
 
 Exit status: 0 success, 1 numerical blow-up (outputs so far are kept) or a failed
-verification check, 2 bad input (scene file, option or output directory; nothing written).
+verification check, 2 bad input (scene file, option, output directory or restart; nothing
+written), 130 / 143 stopped by SIGINT / SIGTERM after writing a checkpoint (128 + the signal).
 Every error is one line on standard error, starting "scoursph: error:".
 """
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -44,6 +46,20 @@ def _parser():
         "--overwrite",
         action="store_true",
         help="replace an earlier run in the output directory (only the files a run writes are removed)",
+    )
+    r.add_argument(
+        "--restart",
+        type=Path,
+        metavar="RUN_DIR",
+        help="continue the run in RUN_DIR from its newest readable checkpoint (or the one --checkpoint "
+        "names); outputs continue in RUN_DIR. SCENE must be the run's scene (scene.end_time, output.* and "
+        "parallel.* may change)",
+    )
+    r.add_argument(
+        "--checkpoint",
+        metavar="NAME",
+        help="with --restart: the checkpoint to continue from, by file name in RUN_DIR/checkpoints/ "
+        "(000001234.h5) or step number (1234); later checkpoints of that run are removed",
     )
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -122,18 +138,54 @@ def _run(args):
         if comm.is_root():
             print(explain(build_plan(scene), scene))
         return 0
+    from solver.interrupt import Interrupted
+    from solver.output.checkpoint import CheckpointError
     from solver.run import run_scene
 
     out = args.out or Path("runs") / scene.scene.name
+    if args.restart is not None and (args.overwrite or args.out is not None):
+        if comm.is_root():
+            _fail("--restart continues in the run's own directory: it takes no --out or --overwrite", 2)
+        return 2
+    run_dir = out
+    if args.restart is not None:  # the run directory, also when --restart names a checkpoint file
+        run_dir = args.restart.parent.parent if args.restart.is_file() else args.restart
+    if args.checkpoint is not None and args.restart is None:
+        if comm.is_root():
+            _fail(
+                f"--checkpoint {args.checkpoint}: it names a checkpoint of --restart RUN_DIR, "
+                "which is missing",
+                2,
+            )
+        return 2
     try:
-        result = run_scene(scene, out, comm=comm, quiet=args.quiet, overwrite=args.overwrite)
+        result = run_scene(
+            scene,
+            out,
+            comm=comm,
+            quiet=args.quiet,
+            overwrite=args.overwrite,
+            restart=args.restart,
+            checkpoint=args.checkpoint,
+        )
     except RunDirError as exc:
         if comm.is_root():
             _fail(f"--out {exc}", 2)
         return 2
+    except CheckpointError as exc:
+        if comm.is_root():
+            _fail(f"--restart {exc}", 2)
+        return 2
+    except Interrupted as exc:
+        if comm.is_root():
+            _interrupted(exc, args, run_dir)
+        return exc.status
+    except KeyboardInterrupt:  # a second SIGINT, serial (interrupt.py; MPI aborts): no checkpoint
+        _fail("stopped at once by a second SIGINT: no checkpoint written (earlier ones remain)", 130)
+        return 130
     except BlowUpError as exc:
         if comm.is_root():
-            _fail(f"{exc}; outputs written so far are kept in {out}/", 1)
+            _fail(f"{exc}; outputs written so far are kept in {run_dir}/", 1)
         return 1
     if comm.is_root():
         print(
@@ -141,11 +193,26 @@ def _run(args):
             "wall, "
             f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s"
         )
+        out = result.out_dir  # a restart's is the run directory it continues
         print(
             f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, "
             "scene.toml, run.json"
         )
     return 0
+
+
+def _interrupted(exc, args, run_dir):
+    """The one line a stopped run leaves on standard error (with the command that resumes it)."""
+    if exc.checkpoint is not None:
+        sets = "".join(f" --set {shlex.quote(s)}" for s in args.set)
+        resume = f"scoursph run {shlex.quote(str(args.scene))}{sets} --restart {shlex.quote(str(run_dir))}"
+        how = f"checkpoint written to {exc.checkpoint}; resume with {resume}"
+    elif exc.error is not None:
+        how = f"no checkpoint written ({exc.error}); the earlier ones in {run_dir} remain"
+    else:
+        how = "no checkpoint (outputs not written)"
+    at = f"at t = {exc.t:.6g} s (step {exc.step})"
+    print(f"scoursph: interrupted by {exc.signame} {at}; {how}", file=sys.stderr)
 
 
 # Resident memory per particle measured for the 2D dam break (README "Speed"): a lower bound,

@@ -319,6 +319,11 @@ class Output(Strict):
     vtk: bool
     render: bool
     render_field: str
+    # checkpoints (solver/output/checkpoint.py; defaults and reasons in defaults.toml)
+    checkpoint_interval: NonNegative  # simulated s between checkpoints; 0 = none by simulated time
+    checkpoint_wall_interval: NonNegative  # wall-clock s between checkpoints; 0 = none by wall clock
+    checkpoint_keep: Annotated[int, Field(ge=1)]  # the newest this many are kept
+    checkpoint_at_end: bool  # one more when the run completes (to extend it with a later end_time)
 
     @field_validator("times")
     @classmethod

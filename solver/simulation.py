@@ -17,6 +17,7 @@ from .integrate import STATE_OK, as_rows, lf_drift, lf_kick, lf_predict, max_nor
 from .kernels import cubic_spline_normalisation
 from .neighbors import CellGrid, CellList, verlet_radius
 from .parallel.communicator import SerialCommunicator
+from .particles import Mirror
 from .physics.wall_images import WallImages, wall_planes
 from .plan import RATE_STAGES, Plan, build_plan
 from .scene import Scene
@@ -25,7 +26,9 @@ from .timestep import TimeStepper
 
 
 class Simulation:
-    def __init__(self, scene: Scene, comm=None, plan: Plan | None = None, particles=None):
+    def __init__(self, scene: Scene, comm=None, plan: Plan | None = None, particles=None, resume=None):
+        """`resume`: continue from a checkpoint (solver/output/checkpoint.py `Resume`; `particles`
+        then holds this rank's particles from it): no set-up, no settling, see `_resume`."""
         self.scene = scene
         self.comm = comm or SerialCommunicator()
         self.plan = plan or build_plan(scene)
@@ -57,10 +60,14 @@ class Simulation:
         self._rho_state = "rho_half" if "rho_half" in self.particles else "rho"  # density checked for NaN
         self.wall_reflections = 0  # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
+        self.settling = None
+        if resume is not None:
+            self.comm.setup(scene)
+            self._resume(resume)
+            return
         self._start_half_steps()
         self.comm.setup(scene)  # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
-        self.settling = None
         if scene.numerics.settling_time > 0:
             self.settle(scene.numerics.settling_time)
 
@@ -249,6 +256,78 @@ class Simulation:
         for term in self.plan.terms:
             term.derive(self.ctx)
         return self.particles
+
+    # -- checkpoint and restart (generic: the step loop's own state, no physics) -------------
+    def saved_state(self) -> dict:
+        """Everything the step loop carries from step to step outside the particle fields, for a
+        checkpoint (solver/output/checkpoint.py): values alike on every rank ("shared"), this
+        rank's diagnostics ("rank"), and each term's state (Term.state; None = nothing)."""
+        return {
+            "shared": {
+                "t": self.t,
+                "step_count": self.step_count,
+                "dt_prev": self.dt_prev,
+                "dt_first": self.dt_first,
+                "dt_limit": self.dt_limit,
+                "dt": self.ctx.dt,
+                "rebuilds": self.rebuilds,
+                "settling": self.settling,
+                "gravity": self.ctx.gravity.tolist(),
+            },
+            "rank": {
+                "wall_reflections": int(self.wall_reflections),
+                "deepest_penetration": float(self.deepest_penetration),
+                "next_id": int(self.particles.next_id),
+            },
+            "terms": {t.name: s for t in self.plan.terms if (s := t.state()) is not None},
+        }
+
+    def _resume(self, resume):
+        """Continue from a checkpoint. The particle fields (this rank's rows, in the order they
+        had) are back; what the last neighbour rebuild built from them (ghosts, wall images,
+        neighbour lists, cell order, the MPI cuts) is rebuilt by replaying that rebuild: at the
+        positions it saw, the Verlet references x_ref, with the cuts it used (same rank count).
+        So the lists, and the order of every pair sum, are those of the uninterrupted run, and
+        the run continues bit for bit; a fresh rebuild at the current positions would sum in
+        another order and rebuild on another schedule (round-off differences). On another rank
+        count the cuts are made afresh from x_ref; the lists are valid, as every particle is
+        within skin/2 of x_ref. Then the current positions go back, ghosts and images are
+        refreshed, and the scalars and term states are restored."""
+        ps = self.particles
+        n = ps.n_owned
+        ids = ps.owned("id").copy()
+        order = np.argsort(ids, kind="stable")
+        ids_sorted, x_now = ids[order], ps.owned("x")[order].copy()
+        ps["x"][:n] = ps["x_ref"][:n]
+        self.comm.restore_decomposition(resume.decomposition)
+        self.rebuild()
+        n = ps.n_owned
+        at = np.searchsorted(ids_sorted, ps.owned("id"))
+        if n and (at.max() >= len(ids_sorted) or np.any(ids_sorted[at] != ps.owned("id"))):
+            raise RuntimeError("restart: a particle reached this rank that it did not load")
+        ps["x"][:n] = x_now[at]
+        shared = resume.shared
+        self.t = float(shared["t"])
+        self.step_count = int(shared["step_count"])
+        self.dt_prev = self.ctx.dt_prev = float(shared["dt_prev"])
+        self.dt_first = None if shared["dt_first"] is None else float(shared["dt_first"])
+        self.dt_limit = shared["dt_limit"]
+        self.ctx.dt = float(shared["dt"])
+        self.rebuilds = int(shared["rebuilds"])
+        self.settling = shared["settling"]
+        self.ctx.gravity[:] = shared["gravity"]
+        mine = resume.rank_state
+        self.wall_reflections = int(mine["wall_reflections"])
+        self.deepest_penetration = float(mine["deepest_penetration"])
+        ps.next_id = max(ps.next_id, int(mine["next_id"]))
+        for term in self.plan.terms:
+            if term.name in resume.terms:
+                term.restore(resume.terms[term.name])
+        # ghosts and images of every changing field from the owners' current values (the step
+        # refreshes each before it is read anyway; this leaves no row at x_ref)
+        self.refresh(
+            tuple(k for k, f in self.plan.fields.items() if f.mirror is not Mirror.NONE and not f.constant)
+        )
 
     # -- failure reports ----------------------------------------------------------------
     def _worst_acceleration(self):

@@ -103,6 +103,30 @@ class Term:
     def on_rebuild(self, ctx: TermContext) -> None:
         """Called after every neighbour rebuild (after the halo is built)."""
 
+    # -- checkpoint and restart (solver/output/checkpoint.py) ------------------------------------
+    def state(self):
+        """What this term carries from one step to the next outside the particle fields (counters,
+        accumulated totals, a moving inlet's position), for a checkpoint: this rank's share, as
+        JSON data (numbers, strings, lists, dicts; NumPy arrays and scalars are written as lists
+        and numbers, floats exactly). None (the default): nothing, everything is in the fields or
+        is recomputed at a neighbour rebuild (which the restart replays)."""
+        return None
+
+    def restore(self, state) -> None:
+        """Put back what state() returned (after the restart's neighbour rebuild)."""
+
+    def regroup_state(self, states: list, size: int) -> list:
+        """The states for `size` ranks from those a checkpoint written on len(states) ranks holds
+        (a restart on another rank count). Default: a state every rank holds alike (a replicated
+        counter) goes to every rank; a term whose ranks hold different shares (a per-rank count)
+        must say how to regroup them (e.g. the sum on rank 0, zero elsewhere)."""
+        if all(s == states[0] for s in states):
+            return [states[0]] * size
+        raise ValueError(
+            f"term '{self.name}' holds different state on each rank and does not say how to regroup it "
+            f"for {size} rank(s) (Term.regroup_state): restart on {len(states)} rank(s)"
+        )
+
     def explain(self) -> list[str]:
         """Extra lines for --explain (options in force)."""
         return []

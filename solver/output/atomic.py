@@ -7,11 +7,35 @@ import os
 from pathlib import Path
 
 
+def partial_path(path) -> Path:
+    """The temporary name beside `path` that a write goes to before the rename."""
+    path = Path(path)
+    return path.with_name(f".{path.stem}.partial{path.suffix}")
+
+
+def commit(tmp, path):
+    """Sync the finished temporary file, rename it over `path`, and sync the directory, so the
+    rename itself survives a crash of the machine."""
+    with open(tmp, "rb") as fh:
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    try:
+        fd = os.open(Path(path).parent, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def atomic_path(path):
     """Yield a temporary path beside `path`; on success it replaces `path` atomically."""
     path = Path(path)
-    tmp = path.with_name(f".{path.stem}.partial{path.suffix}")
+    tmp = partial_path(path)
     try:
         yield tmp
         with open(tmp, "rb") as fh:

@@ -21,12 +21,13 @@ from .atomic import atomic_path
 
 
 class Hdf5Series:
-    def __init__(self, out_dir, metadata: dict, scene_toml: str):
+    def __init__(self, out_dir, metadata: dict, scene_toml: str, snapshots=None):
+        """`snapshots`: [(file, time, step, count)] of a series being continued (a restart)."""
         self.out = Path(out_dir)
         (self.out / "snapshots").mkdir(parents=True, exist_ok=True)
         self.metadata = dict(metadata)
         self.scene_toml = scene_toml
-        self.snapshots: list[tuple[str, float, int, int]] = []
+        self.snapshots: list[tuple[str, float, int, int]] = [tuple(s) for s in snapshots or ()]
         self._write_series()
 
     @property

@@ -11,7 +11,7 @@ other output:
   * any other non-empty directory (`--out .`, a home directory) and any non-directory path
     are refused with RunDirError (exit status 2), before anything is computed or written.
 
-A later restart continues in a run directory: it calls `read_marker` (it is a run) and
+A restart (`--restart`, output/checkpoint.py) continues in a run directory: it calls
 `claim(..., mode="continue")`, which keeps the existing outputs and refreshes the marker.
 """
 
@@ -29,7 +29,11 @@ from .atomic import atomic_write_text
 MARKER = ".scoursph-run"
 OWN_FILES = ("particles.h5", "particles.pvd", "final.png", "scene.toml", "run.json")
 # sub-directory -> names of the files a run writes there (snapshot and VTK series)
-OWN_DIRS = {"snapshots": re.compile(r"\d{6}\.h5"), "vtk": re.compile(r"\d{6}\.vtp")}
+OWN_DIRS = {
+    "snapshots": re.compile(r"\d{6}\.h5"),
+    "vtk": re.compile(r"\d{6}\.vtp"),
+    "checkpoints": re.compile(r"\d{9}\.h5"),  # output/checkpoint.py
+}
 # write-then-rename leftovers of a crashed run (solver/output/atomic.py)
 _PARTIAL = re.compile(r"\..+\.partial(\.[A-Za-z0-9]+)?")
 MODES = ("new", "overwrite", "continue")

@@ -32,10 +32,13 @@ def particles_polydata(fields: dict[str, np.ndarray]) -> pv.PolyData:
 
 
 class VtkSeries:
-    def __init__(self, out_dir):
+    def __init__(self, out_dir, entries=None):
+        """`entries`: [(time, file)] of a series being continued (a restart)."""
         self.out = Path(out_dir)
         (self.out / "vtk").mkdir(parents=True, exist_ok=True)
-        self.entries: list[tuple[float, str]] = []
+        self.entries: list[tuple[float, str]] = [tuple(e) for e in entries or ()]
+        if entries is not None:
+            self._write_collection()
 
     @property
     def path(self):
@@ -45,7 +48,10 @@ class VtkSeries:
         rel = f"vtk/{len(self.entries):06d}.vtp"
         with atomic_path(self.out / rel) as tmp:
             particles_polydata(fields).save(tmp)
-        self.entries.append((t, rel))
+        self.entries.append((float(t), rel))  # a NumPy scalar's repr is "np.float64(...)": not for ParaView
+        self._write_collection()
+
+    def _write_collection(self):
         rows = "\n".join(
             f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(f)}/>' for t, f in self.entries
         )

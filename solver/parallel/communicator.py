@@ -58,6 +58,22 @@ class SerialCommunicator:
     def bcast(self, value):
         return value
 
+    # Checkpoints (solver/output/checkpoint.py): any picklable value, one per rank.
+    def gather(self, value):
+        """[value of each rank] on the root (None elsewhere)."""
+        return [value]
+
+    def allgather(self, value):
+        """[value of each rank] on every rank."""
+        return [value]
+
+    def decomposition_state(self):
+        """MPI: the current domain cuts (arrays) for a checkpoint; serial: None."""
+        return None
+
+    def restore_decomposition(self, state):
+        """MPI: use these cuts (a restart on the same rank count); None: cut afresh."""
+
     def abort(self, message, status):
         raise SystemExit(status)
 

@@ -29,7 +29,7 @@ from collections import defaultdict
 import numpy as np
 from mpi4py import MPI
 
-from .decomposition import bisect
+from .decomposition import Decomposition, bisect
 from .packing import pack, row_layout, unpack, unpack_dict
 
 TAG_HALO, TAG_MIGRATE = 11, 12
@@ -226,6 +226,37 @@ class MpiCommunicator:
 
     def bcast(self, value):
         return self.comm.bcast(value, root=0)
+
+    def gather(self, value):
+        with self._timed("gather"):
+            return self.comm.gather(value, root=0)
+
+    def allgather(self, value):
+        with self._timed("gather"):
+            return self.comm.allgather(value)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def decomposition_state(self):
+        """The current cuts, for a checkpoint: a restart on the same rank count reuses them, so
+        it replays the last neighbour rebuild exactly (recutting would move particles between
+        ranks and change the order of the pair sums)."""
+        d = self.decomposition
+        if d is None:
+            return None
+        return {"lo": d.lo, "hi": d.hi, "region_lo": d.region_lo, "region_hi": d.region_hi}
+
+    def restore_decomposition(self, state):
+        """Cuts from a checkpoint of the same rank count; None: the first rebuild cuts afresh
+        from the particles every rank holds (a restart on another rank count)."""
+        if state is None:
+            self.decomposition = None
+            return
+        self.decomposition = Decomposition(
+            *(np.asarray(state[k], float) for k in ("lo", "hi", "region_lo", "region_hi"))
+        )
+        if self.decomposition.size != self.size:
+            raise ValueError(f"decomposition for {self.decomposition.size} ranks restored on {self.size}")
+        self._rebalance = False
 
     # -- point to point --------------------------------------------------------------------
     def _exchange(self, send, send_counts, recv_counts, tag):
