@@ -639,9 +639,15 @@ def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks):
     slumps onto it and sideways, so the drag, the pore pressure on the skeleton, the Biot storage
     and the pore pressure interpolated at soil particles all act across the rank cuts (recut every
     25 steps). 300 steps on 2 and 3 ranks equal serial within the round-off bound of
-    roundoff_tolerances, whose momentum-rate sum gets the drag's terms too: per unit mass they sum
-    to at most lambda_max (2 v_max), lambda_max = cfl.drag / dt_drag <= 1 / dt (the drag limit),
-    entered as an equivalent pressure p_drag = rho0 lambda_max 2 v_max / (2 G) with G ~ 1.4 / h."""
+    roundoff_tolerances, with three additions, each an upper bound:
+      * its momentum-rate sum gets the drag's terms: per unit mass they sum to at most
+        lambda_max (2 v_max), lambda_max <= cfl.drag / dt (the drag limit, cfl.drag = 1; the mean
+        dt of the run stands for dt), entered as an equivalent pressure p_drag = rho0 lambda_max
+        v_max / G with G ~ 1.4 / h (the bound's own G is larger, so this overstates p_drag);
+      * pore water has the apparent density n rho_w = 400 kg/m3: the tolerances on x and v take the
+        smallest density (the p / rho0 term is largest), the one on rho the largest (the soil's);
+      * Biot's storage adds -rho (phi / (1 - phi)) div v_s to the continuity sum, at most 19 times
+        that sum (phi is capped at 0.95): every tolerance is multiplied by 1 + 19."""
     scene = tmp_path / "saturated.toml"
     scene.write_text(SATURATED)
     sets = [
@@ -658,11 +664,16 @@ def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks):
     assert np.abs(s["v"]).max() > 0.05  # water slumping, bed settling
     dx, h = 0.01, 0.013
     v_max = float(np.max(np.linalg.norm(s["v"], axis=1)))
-    lam = 1.0 / (s_stats["t"] / 300)  # lambda_max <= 1 / dt_mean (cfl.drag = 1)
-    p_drag = 1000.0 * lam * 2 * v_max * h / (2 * 1.4)
-    tol_x, tol_v, tol_rho = roundoff_tolerances(
-        s, s_stats, spacing=dx, c=29.0, p_max=1000.0 * 9.81 * 0.2 + p_drag, alpha=1.0
-    )  # c: the soil's P-wave speed, the fastest wave here
+    lam = 1.0 / (s_stats["t"] / 300)
+    rho_pore, rho_max = 0.4 * 1000.0, float(np.max(s["rho"]))
+    p_drag = rho_pore * lam * v_max * h / 1.4
+    sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()  # the soil's largest stress
+    p_max = max(1000.0 * 9.81 * 0.2, sigma) + p_drag
+    storage = 1.0 + 0.95 / 0.05
+    bound = dict(spacing=dx, c=29.0, p_max=p_max, alpha=1.0)
+    tol_x, tol_v, _ = roundoff_tolerances(s, s_stats, rho0=rho_pore, **bound)
+    _, _, tol_rho = roundoff_tolerances(s, s_stats, rho0=rho_max, **bound)
+    tol_x, tol_v, tol_rho = storage * tol_x, storage * tol_v, storage * tol_rho  # c: the soil's P wave
     for n in ranks:
         m, m_stats = run(n)
         np.testing.assert_array_equal(m["id"], s["id"])
@@ -673,5 +684,7 @@ def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks):
             ("x", np.abs(m["x"] - s["x"]).max(), tol_x),
             ("v", np.abs(m["v"] - s["v"]).max(), tol_v),
             ("rho", np.abs(m["rho"] - s["rho"]).max(), tol_rho),
+            ("mean_stress", np.abs(m["mean_stress"] - s["mean_stress"]).max(), rho_max * 29.0 * tol_v),
+            ("stress_dev", np.abs(m["stress_dev"] - s["stress_dev"]).max(), rho_max * 29.0 * tol_v),
         ):
             assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g} (ranks = {n})"

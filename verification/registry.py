@@ -21,6 +21,10 @@ CASES = {
     "hydrostatic": "verification.hydrostatic",
     "column_collapse": "verification.column_collapse",
     "soil_self_weight": "verification.soil_self_weight",
+    "seepage_bed_at_rest": "verification.seepage_bed_at_rest",
+    "seepage_darcy": "verification.seepage_darcy",
+    "seepage_terzaghi": "verification.seepage_terzaghi",
+    "seepage_critical_gradient": "verification.seepage_critical_gradient",
 }
 
 
