@@ -85,6 +85,17 @@ def geometry(dx):
             "width": W_L + baffle + W_R}  # fmt: skip
 
 
+def baffle_material(formulation):
+    """The baffle's wall particles: frozen pore water. In the mixture form pore water has the
+    apparent density n rho_w and its EOS p = B [(rho / (n rho_w))^7 - 1] with the water's B: a wall of
+    free water (rho_w) next to it is a density jump of 2.5 that the wall particles' continuity
+    turned into a growing oscillation of the pore water along the wall (blow-up at 0.14 s); a wall
+    material of density n rho_w and the same B (c_b = c / sqrt(n)) is the pore water frozen."""
+    if formulation == "seed":
+        return sc.WATER
+    return {**sc.WATER, "density": POROSITY * sc.RHO_W, "typical_velocity": sc.WATER["typical_velocity"] / POROSITY**0.5}
+
+
 def head_level(ratio):
     """Left water table for a gradient ratio * i_c across the sample (filter losses neglected)."""
     return F + L + ratio * critical_gradient() * L
@@ -96,16 +107,16 @@ def scene(resolution, ratio, formulation="mixture", t_end=T_END):
     h_left = head_level(ratio)
     top = h_left + 0.02
     x0, x1 = geo["sample"]
-    fixed = {"shape": "rectangle", "fixed": True, "saturated": True, "water_table": h_left}
+    fixed = {"shape": "rectangle", "fixed": True, "saturated": True, "water_table": h_left, "pore_water": "water"}
     blocks = [
         {**fixed, "name": "filter", "material": "filter", "min": [0.0, 0.0], "max": [geo["width"], F]},
         {**fixed, "name": "left_leg", "material": "filter", "min": [0.0, F], "max": [W_L, h_left]},
-        {"name": "baffle", "material": "water", "shape": "rectangle", "fixed": True,
+        {"name": "baffle", "material": "baffle", "shape": "rectangle", "fixed": True,
          "min": [geo["baffle"][0], F], "max": [geo["baffle"][1], top]},
         {"name": "sample", "material": "sand", "shape": "rectangle", "min": [x0, F], "max": [x1, F + L],
-         "saturated": True, "geostatic": True, "water_table": F + L},
+         "saturated": True, "geostatic": True, "water_table": F + L, "pore_water": "water"},
     ]  # fmt: skip
-    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER}
+    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER, "baffle": baffle_material(formulation)}
     walls = {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"}
     return sc.scene("seepage_critical_gradient", dx, t_end, [geo["width"], top + 0.02], mats, blocks,
                     formulation, walls)  # fmt: skip

@@ -1,15 +1,20 @@
 """Terzaghi 1D consolidation (issue 10, item 4; docs/verification_seepage.md case 3).
 
 Set-up: a saturated elastic soil column H = 0.1 m tall between free-slip walls (laterally
-confined: an oedometer) on an impermeable floor, started in equilibrium under gravity
-(hydrostatic pore pressure, buoyant geostatic stress). Its top is drained: the pore water's
-free surface is the soil surface (p = 0 there). At t = 0 it carries a surcharge: a dry,
-permeable load layer (`fixed` it is not: it settles with the column) of the same porosity,
-permeability 100 k, density RHO_LOAD and thickness T_LOAD, placed on the soil surface with its
-own geostatic stress, so that q = RHO_LOAD g T_LOAD = 9.81 kPa reaches the skeleton at once.
-(Why this load: no traction term is needed, and the pore water expelled from the column enters
-pores of the same porosity, so the pore-water particles keep a consistent water fraction;
-docs/seepage.md.) Gravity is on; the excess pore pressure is u = p - gamma_w (H - y).
+confined: an oedometer) on an impermeable floor. Its top is drained: the pore water's free surface
+is the soil surface (p = 0 there). It carries a surcharge q: a dry, permeable load layer of the same
+porosity, permeability 100 k, density RHO_LOAD and thickness T_LOAD on the soil surface
+(q = RHO_LOAD g T_LOAD = 9.81 kPa; no traction term is needed, and the pore water expelled from
+the column enters pores of the same porosity, so its particles keep a consistent water fraction,
+docs/seepage.md). Gravity is on; the excess pore pressure is u = p - gamma_w (H - y).
+
+The run starts in the state just after an instantaneous loading (`initial_state`): pore pressure
+hydrostatic + B q (the block's water table raised by B q / gamma_w), the skeleton at its buoyant
+geostatic stress + (1 - B) q, the load layer at its own geostatic stress: total stress in
+equilibrium with the load. (A first version placed the load on the column at t = 0: the heavy
+layer on the column's undrained stiffness rang at ~23 Hz with an amplitude of u0, so u at
+T_v = 0.1 was 1.66 u_series at dx = 10 mm; Terzaghi's problem starts after the undrained
+response, which this initial state is.)
 
 Reference (verification.analytic.seepage): with weakly compressible water, the load splits at
 once into u0 = B q, B = m_v / (m_v + n / K_w), K_w = rho_w c^2 (Skempton), and u then follows
@@ -70,17 +75,52 @@ def scene(resolution, formulation="mixture", typical_velocity=2.0, t_end=None):
     mats = materials(typical_velocity)
     blocks = [
         {"name": "column", "material": "soil", "shape": "rectangle", "min": [0.0, 0.0], "max": [WIDTH, H],
-         "saturated": True, "geostatic": True},
+         "saturated": True, "water_table": H + T_LOAD + water_table_rise(formulation, typical_velocity)},
         {"name": "load", "material": "load", "shape": "rectangle", "min": [0.0, H],
-         "max": [WIDTH, H + T_LOAD], "geostatic": True},
+         "max": [WIDTH, H + T_LOAD], "geostatic": True, "saturated": True},
     ]  # fmt: skip
-    t_end = t_end or reference(typical_velocity)["t1"] * 1.02
+    t_end = t_end or reference(typical_velocity, formulation)["t1"] * 1.02
     return sc.scene("seepage_terzaghi", dx, t_end, [WIDTH, H + T_LOAD + 0.03], mats, blocks, formulation)
 
 
-def reference(typical_velocity=2.0):
-    """q, m_v, K_w, B, u0, c_v, c_v,eff and the time of T_v = 1."""
-    q = RHO_LOAD * sc.G * T_LOAD
+def initial_state(sim, formulation, typical_velocity=2.0):
+    """Overwrite the column's skeleton stress with the state just after loading: sigma'_v =
+    gamma_b (H - y) + q_s, sigma'_h = K0 sigma'_v (as solver.initial_state.geostatic_state), with
+    gamma_b the buoyant unit weight and q_s = (1 - B) q in the mixture; the seed's skeleton feels
+    no pore pressure, so it carries its dry weight and all of q. Half-step fields follow."""
+    ref = reference(typical_velocity, formulation)
+    ps = sim.particles
+    n = ps.n_owned
+    mat = sim.scene.materials["soil"]
+    rows = np.flatnonzero(ps["material"][:n] == sim.plan.materials.index("soil"))
+    depth = H - ps["x"][rows, 1]
+    mix = formulation == "mixture"
+    weight = sc.buoyant_unit_weight(materials()["soil"]) if mix else mat.density * sc.G
+    sv = weight * depth + ((1.0 - ref["B"]) if mix else 1.0) * ref["q"]
+    sh = mat.k0 * sv
+    p = (sv + 2.0 * sh) / 3.0
+    rho = mat.density * (1.0 + p / mat.bulk)  # inverse of seed eq. (17)
+    s = np.zeros((len(rows), 6))
+    s[:, 0], s[:, 1], s[:, 2] = p - sh, p - sv, p - sh
+    for name, value in (("rho", rho), ("stress_dev", s)):
+        for f in (name, name + "_half"):
+            if f in ps:
+                ps[f][rows] = value
+
+
+def water_table_rise(formulation, typical_velocity=2.0):
+    """B q / gamma_w: the undrained excess pore pressure as a raised water table (both forms start
+    from the same pore pressure; the seed has no storage to produce it, see the docstring)."""
+    ref = reference(typical_velocity, formulation)
+    return ref["u0"] / sc.GAMMA_W
+
+
+def reference(typical_velocity=2.0, formulation="mixture"):
+    """q, m_v, K_w, B, u0, c_v, c_v,eff and the time of T_v = 1. q is the load layer's weight per
+    area that its skeleton passes on: buoyant in the mixture form, (RHO_LOAD - (1 - n) rho_w) g T,
+    dry in the seed's, RHO_LOAD g T."""
+    buoyancy = (1.0 - POROSITY) * sc.RHO_W if formulation == "mixture" else 0.0
+    q = (RHO_LOAD - buoyancy) * sc.G * T_LOAD
     m_v = 1.0 / an.oedometric_modulus(E, 0.0)
     k_w = an.water_bulk_modulus(10.0 * typical_velocity)
     b = an.skempton_b(m_v, POROSITY, k_w)
@@ -92,8 +132,9 @@ def reference(typical_velocity=2.0):
 def run_one(resolution, formulation="mixture", typical_velocity=2.0, tv_list=TV_CHECK):
     from solver.simulation import Simulation
 
-    ref = reference(typical_velocity)
+    ref = reference(typical_velocity, formulation)
     sim = Simulation(scene(resolution, formulation, typical_velocity, ref["t1"] * max(tv_list) * 1.02))
+    initial_state(sim, formulation, typical_velocity)
     dx = H / resolution
     edges = np.arange(0.0, H + 0.5 * dx, 2 * dx)
     yc = 0.5 * (edges[1:] + edges[:-1])
@@ -103,7 +144,7 @@ def run_one(resolution, formulation="mixture", typical_velocity=2.0, tv_list=TV_
         wa = sc.water_rows(s)
         y = ps["x"][wa, 1]
         inside = y < H
-        u = ps["p"][wa][inside] - sc.GAMMA_W * (H - y[inside])
+        u = ps["p"][wa][inside] - sc.GAMMA_W * (H + T_LOAD - y[inside])
         return sc.bin_profile(y[inside], u, edges)
 
     # each check time is the mean of 5 samples over +/- 2 % of it (a gauge's finite response)
