@@ -23,9 +23,9 @@ Tolerances:
 
 The seed's formulation (eqs. 18, 20, 21) has no pore pressure acting on the skeleton: the
 skeleton carries its dry weight, sigma'_v = rho_dry g (D - y), i.e. rho_dry / (rho_dry - (1 - n)
-rho_w) = 1.667 gamma' z for n = 0.4, rho_grain = 2650 (+67 %; the memo's 1.61 is for rho_grain
-= 2650 with n = 0.32, the lead's example: 1.607). The case cannot pass the buoyancy check with
-it: it says so and pins the measured slope to that derived value (same tolerance h / D).
+rho_w) = rho_grain / (rho_grain - rho_w) = 1.606 gamma' z for rho_grain = 2650 (+61 %, whatever n).
+The case cannot pass the buoyancy check with it: it says so and pins the measured slope to that
+derived value (same tolerance h / D).
 
 ROW_MODE: the soil's stress alternates from one particle row to the next (a zero-energy mode of
 the SPH stress divergence, present in both formulations); a gauge averages over it, so the bins

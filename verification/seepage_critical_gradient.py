@@ -93,7 +93,8 @@ def baffle_material(formulation):
     material of density n rho_w and the same B (c_b = c / sqrt(n)) is the pore water frozen."""
     if formulation == "seed":
         return sc.WATER
-    return {**sc.WATER, "density": POROSITY * sc.RHO_W, "typical_velocity": sc.WATER["typical_velocity"] / POROSITY**0.5}
+    c_b = sc.WATER["typical_velocity"] / POROSITY**0.5
+    return {**sc.WATER, "density": POROSITY * sc.RHO_W, "typical_velocity": c_b}
 
 
 def head_level(ratio):
@@ -107,7 +108,8 @@ def scene(resolution, ratio, formulation="mixture", t_end=T_END):
     h_left = head_level(ratio)
     top = h_left + 0.02
     x0, x1 = geo["sample"]
-    fixed = {"shape": "rectangle", "fixed": True, "saturated": True, "water_table": h_left, "pore_water": "water"}
+    fixed = {"shape": "rectangle", "fixed": True, "saturated": True, "water_table": h_left}
+    fixed["pore_water"] = "water"
     blocks = [
         {**fixed, "name": "filter", "material": "filter", "min": [0.0, 0.0], "max": [geo["width"], F]},
         {**fixed, "name": "left_leg", "material": "filter", "min": [0.0, F], "max": [W_L, h_left]},
