@@ -97,3 +97,27 @@ def test_seepage_passes(benchmark, threads):
     for _ in range(10):
         passes()
     benchmark.extra_info["cpu_s_per_call"] = (time.process_time() - cpu) / 10
+
+
+def per_term_minimum(repeats=15):
+    """Minimum time of each term and of the whole step, dry and saturated (docs/seepage.md, Speed):
+    minima are what a loaded machine distorts least."""
+    for saturated in (False, True):
+        sim = bed(saturated)
+        for term in sim.plan.terms:
+            term.run(sim.ctx)
+        print(f"{'saturated' if saturated else 'dry'} bed, {sim.particles.n_owned} particles")
+        for term in sim.plan.terms:
+            best = min(_timed(term.run, sim.ctx) for _ in range(repeats))
+            print(f"  {term.name:40s} {1e3 * best:7.2f} ms")
+        print(f"  {'whole step':40s} {1e3 * min(_timed(sim.step) for _ in range(repeats)):7.2f} ms")
+
+
+def _timed(call, *args):
+    start = time.perf_counter()
+    call(*args)
+    return time.perf_counter() - start
+
+
+if __name__ == "__main__":  # NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_seepage_step.py
+    per_term_minimum()

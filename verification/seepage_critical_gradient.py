@@ -175,16 +175,29 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
     }  # fmt: skip
 
 
+def run_or_blow_up(resolution, ratio, formulation):
+    """run_one, or (a blow-up is a result here) a record of it: no gradient, no heave verdict."""
+    from solver.errors import BlowUpError
+
+    try:
+        return run_one(resolution, ratio, formulation)
+    except BlowUpError as exc:
+        return {"formulation": formulation, "ratio_aimed": ratio, "dx": L / resolution, "particles": 0,
+                "steps": exc.step, "wall": 0.0, "cpu": 0.0, "i": np.nan,
+                "i_over_ic": np.nan, "q": np.nan, "i_sample": np.nan, "t": np.zeros(0), "rise": np.zeros(0),
+                "rise_dx": np.nan, "heave": None, "blow_up": str(exc)}  # fmt: skip
+
+
 def onset_bracket(runs):
-    """(largest i without heave, smallest i with heave), NaN where a side is missing."""
-    stable = [r["i"] for r in runs if not r["heave"]]
-    heave = [r["i"] for r in runs if r["heave"]]
+    """(largest i without heave, smallest i with heave), NaN where a side is missing (or blew up)."""
+    stable = [r["i"] for r in runs if r["heave"] is False]
+    heave = [r["i"] for r in runs if r["heave"] is True]
     return (max(stable) if stable else np.nan), (min(heave) if heave else np.nan)
 
 
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=None):
     ratios = ratios or CI_RATIOS
-    runs = {f: [run_one(resolution, r, f) for r in ratios[f]] for f in sc.FORMULATIONS}
+    runs = {f: [run_or_blow_up(resolution, r, f) for r in ratios[f]] for f in sc.FORMULATIONS}
     first = runs["mixture"][0]
     every = [r for rs in runs.values() for r in rs]
     res = CaseResult("seepage_critical_gradient", resolution, first["particles"],
@@ -195,6 +208,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=None):
         f"i_c = gamma'/gamma_w = {i_c:.3f}; without buoyancy (seed) {i_dry:.3f} = {i_dry / i_c:.2f} i_c"
     ]
     res.notes += [
+        f"{f}, aimed at {r['ratio_aimed']:g} i_c: BLEW UP: {r['blow_up']}" if "blow_up" in r else
         f"{f}: i = {r['i']:.3f} ({r['i_over_ic']:.3f} i_c; in the sample {r['i_sample']:.3f}), "
         f"q = {r['q']:.3g} m/s (k i_s = {K * r['i_sample']:.3g}), "
         f"top rise {r['rise_dx']:.3g} dx -> {'heave' if r['heave'] else 'stable'}; {r['steps']} steps, "
@@ -257,13 +271,13 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     for res_ in resolutions:
         for f in sc.FORMULATIONS:
             for ratio in NIGHTLY_RATIOS[f]:
-                r = run_one(res_, ratio, f)
+                r = run_or_blow_up(res_, ratio, f)
                 rows.append({"resolution": res_, "formulation": f, "dx_mm": 1e3 * r["dx"],
                              "particles": r["particles"], "steps": r["steps"], "wall_time_s": r["wall"],
                              "cpu_time_s": r["cpu"], "i_aimed_over_ic": ratio, "i_over_ic": r["i_over_ic"],
                              "i_sample_over_ic": r["i_sample"] / critical_gradient(),
                              "q_over_k_i_sample": r["q"] / (K * r["i_sample"]), "rise_dx": r["rise_dx"],
-                             "heave": int(r["heave"])})  # fmt: skip
+                             "heave": -1 if r["heave"] is None else int(r["heave"])})  # fmt: skip
     save_study(rows, out_dir, "resolution_study")
     (Path(out_dir) / "resolution_study_load.txt").write_text(
         f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}\n"
