@@ -203,8 +203,9 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
         for f, r in runs.items()
     ]  # fmt: skip
     res.notes.append(
-        "seed formulation: no storage term, so the skeleton's compression does not load the pore water "
-        "(no u0 = B q, no diffusion): it cannot pass this case; its errors above show by how much"
+        "seed formulation: no storage term and no pore pressure on the skeleton: started from the same "
+        "u0 = B q, its excess drains by the water's own compressibility (c = k K_w / (gamma_w n) = 2 c_v,eff "
+        "here) and its skeleton never takes the load over: it cannot pass; its errors show by how much"
     )
     if out_dir is not None:
         res.figure = figure(runs, Path(out_dir) / f"seepage_terzaghi_r{resolution}.png")
