@@ -234,7 +234,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     return rows
 
 
-def stiff_drag_study(resolution=DEFAULT_RESOLUTION, out_dir=OUT, t_end=0.1):
+def stiff_drag_study(resolution=10, out_dir=OUT, t_end=0.02):
     """What a small k costs (issue 10 item 2): the homogeneous column at k = 1e-3, 1e-4, 1e-5 m/s
     (cfl.drag = 1), and at k = 1e-5 with cfl.drag = 1.5, 1.9, 2.5 (a single pair's explicit drag is
     stable for lambda dt < 2; measured: cfl.drag = 1.5 is already unstable, docs/seepage.md). Steps,
