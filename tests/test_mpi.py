@@ -583,3 +583,110 @@ def test_output_directory_refusal_ends_every_rank(tmp_path):
     assert r.returncode == 2, r.stderr[-2000:]
     assert r.stderr.count("not a ScourSPH run directory") == 1, r.stderr[-2000:]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
+
+
+SATURATED = """
+[scene]
+name = "saturated_settling"
+dimension = 2
+spacing = 0.01
+end_time = 1.0
+gravity = [0.0, -9.81]
+
+[domain]
+min = [0.0, 0.0]
+max = [0.2, 0.25]
+
+[walls]
+x_min = "free_slip"
+x_max = "free_slip"
+y_min = "free_slip"
+
+[materials.water]
+model = "water"
+density = 1000.0
+typical_velocity = 2.0
+
+[materials.sand]
+model = "soil"
+density = 1590.0
+youngs_modulus = 1.0e6
+poisson_ratio = 0.3
+friction_angle = 33.0
+cohesion = 0.0
+porosity = 0.4
+permeability = 1.0e-3
+
+[[blocks]]
+name = "bed"
+material = "sand"
+shape = "rectangle"
+min = [0.0, 0.0]
+max = [0.2, 0.1]
+saturated = true
+
+[[blocks]]
+name = "pond"
+material = "water"
+shape = "rectangle"
+min = [0.0, 0.1]
+max = [0.12, 0.2]
+"""
+
+
+@pytest.mark.parametrize("formulation,ranks", [("mixture", (2, 3)), ("seed", (2,))])
+def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks):
+    """A saturated bed (soil + pore water on one lattice, issue 10) released stress-free under a
+    water block that is not hydrostatic and covers only part of it: the bed settles, the water
+    slumps onto it and sideways, so the drag, the pore pressure on the skeleton, the Biot storage
+    and the pore pressure interpolated at soil particles all act across the rank cuts (recut every
+    25 steps). 300 steps on 2 and 3 ranks equal serial within the round-off bound of
+    roundoff_tolerances, with three additions, each an upper bound:
+      * its momentum-rate sum gets the drag's terms: per unit mass they sum to at most
+        lambda_max (2 v_max), lambda_max <= cfl.drag / dt (the drag limit, cfl.drag = 1; the mean
+        dt of the run stands for dt), entered as an equivalent pressure p_drag = rho0 lambda_max
+        v_max / G with G ~ 1.4 / h (the bound's own G is larger, so this overstates p_drag);
+      * pore water has the apparent density n rho_w = 400 kg/m3: the tolerances on x and v take the
+        smallest density (the p / rho0 term is largest), the one on rho the largest (the soil's);
+      * Biot's storage adds -rho (phi / (1 - phi)) div v_s to the continuity sum, at most 19 times
+        that sum (phi is capped at 0.95): every tolerance is multiplied by 1 + 19."""
+    scene = tmp_path / "saturated.toml"
+    scene.write_text(SATURATED)
+    sets = [
+        "parallel.rebalance_every=25",
+        "parallel.imbalance_threshold=1.0",
+        f'numerics.seepage="{formulation}"',
+    ]
+
+    def run(n):
+        (tmp_path / str(n)).mkdir(exist_ok=True)
+        return _driver(tmp_path / str(n), n, scene=scene, steps=300, overrides=sets, timeout=300)
+
+    s, s_stats = run(1)
+    assert np.abs(s["v"]).max() > 0.05  # water slumping, bed settling
+    dx, h = 0.01, 0.013
+    v_max = float(np.max(np.linalg.norm(s["v"], axis=1)))
+    lam = 1.0 / (s_stats["t"] / 300)
+    rho_pore, rho_max = 0.4 * 1000.0, float(np.max(s["rho"]))
+    p_drag = rho_pore * lam * v_max * h / 1.4
+    sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()  # the soil's largest stress
+    p_max = max(1000.0 * 9.81 * 0.2, sigma) + p_drag
+    storage = 1.0 + 0.95 / 0.05
+    bound = dict(spacing=dx, c=29.0, p_max=p_max, alpha=1.0)
+    tol_x, tol_v, _ = roundoff_tolerances(s, s_stats, rho0=rho_pore, **bound)
+    _, _, tol_rho = roundoff_tolerances(s, s_stats, rho0=rho_max, **bound)
+    tol_x, tol_v, tol_rho = storage * tol_x, storage * tol_v, storage * tol_rho  # c: the soil's P wave
+    for n in ranks:
+        m, m_stats = run(n)
+        np.testing.assert_array_equal(m["id"], s["id"])
+        np.testing.assert_array_equal(m["mass"], s["mass"])
+        assert float(m["t"]) == float(s["t"]) and sorted(np.unique(m["rank"]).tolist()) == list(range(n))
+        assert sum(p["migrated"] for p in m_stats["per_rank"]) > 0
+        for name, err, tol in (
+            ("x", np.abs(m["x"] - s["x"]).max(), tol_x),
+            ("v", np.abs(m["v"] - s["v"]).max(), tol_v),
+            ("rho", np.abs(m["rho"] - s["rho"]).max(), tol_rho),
+            ("mean_stress", np.abs(m["mean_stress"] - s["mean_stress"]).max(), rho_max * 29.0 * tol_v),
+            ("stress_dev", np.abs(m["stress_dev"] - s["stress_dev"]).max(), rho_max * 29.0 * tol_v),
+        ):
+            assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g} (ranks = {n})"

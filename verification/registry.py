@@ -22,6 +22,10 @@ CASES = {
     "column_collapse": "verification.column_collapse",
     "soil_self_weight": "verification.soil_self_weight",
     "impact_pressure": "verification.impact_pressure",
+    "seepage_bed_at_rest": "verification.seepage_bed_at_rest",
+    "seepage_darcy": "verification.seepage_darcy",
+    "seepage_terzaghi": "verification.seepage_terzaghi",
+    "seepage_critical_gradient": "verification.seepage_critical_gradient",
 }
 
 

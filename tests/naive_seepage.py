@@ -1,0 +1,73 @@
+"""Slow NumPy twins of the seepage kernels (solver/physics/seepage.py), written from the equations
+of docs/seepage.md: all-pairs loops over the other phase, no neighbour lists.
+
+  p~_b         = sum_a V_a p_a W_ab / sum_a V_a W_ab                     (Shepard, 0 if no water)
+  F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p_a - p~_b) grad_b W_ab
+                 (C = drag of b's material, phi = 1 - n in the mixture form, 0 in the seed's)
+  soil b       acc += sum_a F_ab / m_b
+  water a      acc -= sum_b F_ab / m_a
+  storage a    drho += -rho_a phi_a / (1 - phi_a) div v_s,  phi_a = min(sum_b m_b / rho_grain W_ab, 0.95),
+               div v_s = sum_b V_b (v_b - v~) . grad_a W_ab, v~ = sum_b V_b v_b W_ab / sum_b V_b W_ab
+"""
+
+import numpy as np
+from naive import cubic_spline, grad_w
+
+
+def _within(xa, xb, radius):
+    return np.linalg.norm(xa - xb) < radius
+
+
+def pore_pressure_at_soil(soil, water, x, rho, mass, p, h, dim, radius):
+    out = np.zeros(len(x))
+    for b in soil:
+        w = np.array([mass[a] / rho[a] * cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim) for a in water])
+        inside = np.array([_within(x[a], x[b], radius) for a in water])
+        w = np.where(inside, w, 0.0)
+        out[b] = (w @ p[water]) / w.sum() if w.sum() > 0 else 0.0
+    return out
+
+
+def pair_force(a, b, x, v, rho, mass, p, pore, drag, solid, h, dim):
+    """The force on soil b from water a."""
+    va, vb = mass[a] / rho[a], mass[b] / rho[b]
+    w = cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim)
+    f = va * vb * drag * w * (v[a] - v[b])
+    if solid:
+        f -= solid * va * vb * (p[a] - pore[b]) * grad_w(x[b], x[a], h, dim)
+    return f
+
+
+def seepage_accelerations(soil, water, x, v, rho, mass, material, p, pore, drag, solid, h, dim, radius):
+    """acc of both phases from the coupling alone, and the largest relaxation rates of each side."""
+    acc = np.zeros((len(x), dim))
+    lam = np.zeros(len(x))
+    for b in soil:
+        for a in water:
+            if not _within(x[a], x[b], radius):
+                continue
+            m = material[b]
+            f = pair_force(a, b, x, v, rho, mass, p, pore, drag[m], solid[m], h, dim)
+            acc[b] += f / mass[b]
+            acc[a] -= f / mass[a]
+            w = cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim)
+            k = mass[a] / rho[a] * mass[b] / rho[b] * drag[m] * w
+            lam[b] += k / mass[b]
+            lam[a] += k / mass[a]
+    return acc, lam[soil].max(), lam[water].max()
+
+
+def storage(water, soil, x, v, rho, mass, material, grain_density, h, dim, radius):
+    """Biot's storage rate of every water particle (mixture form)."""
+    drho = np.zeros(len(x))
+    for a in water:
+        nb = [b for b in soil if _within(x[a], x[b], radius)]
+        if not nb:
+            continue
+        w = np.array([cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim) for b in nb])
+        vol = np.array([mass[b] / rho[b] for b in nb])
+        phi = min(sum(mass[b] / grain_density[material[b]] * wb for b, wb in zip(nb, w)), 0.95)
+        v_mean = (vol * w) @ v[nb] / (vol @ w)
+        div = sum(vol[k] * (v[b] - v_mean) @ grad_w(x[a], x[b], h, dim) for k, b in enumerate(nb))
+        drho[a] = -rho[a] * phi / (1.0 - phi) * div
+    return drho

@@ -1,0 +1,263 @@
+"""The water-soil coupling (solver/physics/seepage.py): every kernel against its NumPy twin
+(tests/naive_seepage.py), pair forces equal and opposite, the plan, scene refusals, --explain."""
+
+import subprocess
+
+import naive_seepage
+import numpy as np
+import pytest
+from conftest import ENV, SCOURSPH, disordered_lattice, write_scene
+
+from solver.kernels import cubic_spline_normalisation
+from solver.materials import Phase
+from solver.neighbors import CellGrid, CellList
+from solver.physics.seepage import pore_pressure_at_soil, seepage_on_soil, seepage_on_water
+from solver.plan import build_plan, explain
+from solver.scene import parse_scene
+from solver.simulation import Simulation
+
+N_SOIL, N_POROSITY = 0.4, 0.4
+
+
+def two_phase(rng, dim=2, n_side=10, dx=0.01):
+    """Soil (material 1, two soil materials: ids 1 and 2) and water (material 0) on two jittered
+    lattices over the same square, random velocities, densities and pressures."""
+    h = 1.3 * dx
+    xs = disordered_lattice(n_side, dim, dx, rng)
+    xw = disordered_lattice(n_side, dim, dx, rng)
+    x = np.vstack([xw, xs])
+    nw, ns = len(xw), len(xs)
+    water, soil = np.arange(nw), np.arange(nw, nw + ns)
+    material = np.zeros(nw + ns, dtype=np.int32)
+    material[soil] = 1 + (rng.random(ns) < 0.3)  # two soil materials
+    v = rng.normal(0, 0.2, (nw + ns, dim))
+    rho = np.where(material == 0, 400.0, 1600.0) * (1 + rng.normal(0, 0.01, nw + ns))
+    mass = np.where(material == 0, 400.0, 1600.0) * dx**dim
+    p = rng.uniform(0.0, 2000.0, nw + ns)
+    phase = np.where(material == 0, 0, 1).astype(np.int32)
+    radius = 2 * h * 1.1
+    cells = CellList(CellGrid.covering(np.zeros(dim), np.full(dim, n_side * dx), radius, pad=radius))
+    cells.bin(x, len(x))
+    on_soil = cells.neighbour_list(x, soil.astype(np.int64), radius, phase, 0)
+    on_water = cells.neighbour_list(x, water.astype(np.int64), radius, phase, 1)
+    drag = np.array([0.0, 0.16 * 9810 / 1e-3, 0.16 * 9810 / 1e-4])
+    solid = np.array([0.0, 0.6, 0.7])
+    grain = np.array([0.0, 2650.0, 2500.0])
+    return dict(
+        x=x, v=v, rho=rho, mass=mass, p=p, material=material, water=water, soil=soil, h=h, dim=dim,
+        radius=radius, on_soil=on_soil, on_water=on_water, drag=drag, solid=solid, grain=grain,
+        norm=cubic_spline_normalisation(dim, h),
+    )  # fmt: skip
+
+
+def _pore(s):
+    pore = np.zeros(len(s["x"]))
+    nl = s["on_soil"]
+    pore_pressure_at_soil(
+        nl.targets, nl.start, nl.index, s["x"], s["rho"], s["mass"], s["p"], s["h"], s["norm"], pore,
+        True if s["dim"] == 3 else None,
+    )  # fmt: skip
+    return pore
+
+
+def _rates(s, pore, mixture=True, storage=True):
+    n, dim = len(s["x"]), s["dim"]
+    acc, drho = np.zeros((n, dim)), np.zeros(n)
+    is3d = True if dim == 3 else None
+    solid = s["solid"] if mixture else np.zeros(3)
+    lam_s = seepage_on_soil(
+        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], solid, s["h"], s["norm"], acc, s["p"] if mixture else None,
+        pore if mixture else None, is3d,
+    )  # fmt: skip
+    lam_w = seepage_on_water(
+        s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc,
+        drho if storage else None, s["p"] if mixture else None, pore if mixture else None, is3d,
+    )  # fmt: skip
+    return acc, drho, lam_s, lam_w
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pore_pressure_at_soil_matches_twin(rng, dim):
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    expected = naive_seepage.pore_pressure_at_soil(
+        s["soil"], s["water"], s["x"], s["rho"], s["mass"], s["p"], s["h"], dim, s["radius"]
+    )
+    np.testing.assert_allclose(_pore(s)[s["soil"]], expected[s["soil"]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("dim,mixture", [(2, True), (2, False), (3, True)])
+def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    pore = _pore(s)
+    acc, drho, lam_s, lam_w = _rates(s, pore, mixture=mixture, storage=mixture)
+    solid = s["solid"] if mixture else np.zeros(3)
+    exp_acc, exp_ls, exp_lw = naive_seepage.seepage_accelerations(
+        s["soil"], s["water"], s["x"], s["v"], s["rho"], s["mass"], s["material"], s["p"], pore, s["drag"],
+        solid, s["h"], dim, s["radius"],
+    )  # fmt: skip
+    scale = np.abs(exp_acc).max()
+    np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * scale)
+    assert lam_s == pytest.approx(exp_ls, rel=1e-12) and lam_w == pytest.approx(exp_lw, rel=1e-12)
+    if mixture:
+        exp_drho = naive_seepage.storage(
+            s["water"], s["soil"], s["x"], s["v"], s["rho"], s["mass"], s["material"], s["grain"], s["h"],
+            dim, s["radius"],
+        )  # fmt: skip
+        np.testing.assert_allclose(drho, exp_drho, rtol=1e-10, atol=1e-12 * np.abs(exp_drho).max())
+    else:
+        assert not drho.any()
+
+
+@pytest.mark.parametrize("mixture", [True, False])
+def test_pair_forces_are_equal_and_opposite(rng, mixture):
+    """sum_i m_i a_i over both phases = 0 to round-off: each pair's force is one expression
+    evaluated with the same arguments on both sides (docs/seepage.md)."""
+    s = two_phase(rng)
+    acc, _, _, _ = _rates(s, _pore(s), mixture=mixture, storage=False)
+    momentum_rate = (s["mass"][:, None] * acc).sum(axis=0)
+    scale = (s["mass"][:, None] * np.abs(acc)).sum()
+    assert np.abs(momentum_rate).max() <= 1e-14 * scale
+
+
+BOX = """
+[scene]
+name = "two_phase_box"
+dimension = 2
+spacing = 0.01
+end_time = 0.05
+gravity = [0.0, 0.0]
+
+[domain]
+min = [0.0, 0.0]
+max = [0.2, 0.2]
+
+[materials.water]
+model = "water"
+density = 1000.0
+typical_velocity = 2.0
+
+[materials.sand]
+model = "soil"
+density = 1590.0
+youngs_modulus = 1.0e6
+poisson_ratio = 0.3
+friction_angle = 30.0
+cohesion = 0.0
+porosity = 0.4
+permeability = 1.0e-3
+
+[numerics]
+seepage = "{form}"
+
+[[blocks]]
+name = "bed"
+material = "sand"
+shape = "rectangle"
+min = [0.05, 0.05]
+max = [0.15, 0.15]
+saturated = true
+
+[[blocks]]
+name = "jet"
+material = "water"
+shape = "rectangle"
+min = [0.05, 0.15]
+max = [0.15, 0.19]
+"""
+
+
+@pytest.mark.parametrize("form", ["mixture", "seed"])
+def test_closed_two_phase_box_conserves_momentum(form):
+    """No walls, no gravity: a saturated square hit by a block of water moving at 1 m/s. Every
+    term is a pair force (water-water, soil-soil, water-soil), so the total momentum stays at its
+    initial value to round-off over 200 steps (the seepage pass alone is tested above)."""
+    scene = parse_scene(__import__("tomllib").loads(BOX.replace("{form}", form)), "box.toml")
+    sim = Simulation(scene)
+    ps = sim.particles
+    n = ps.n_owned
+    jet = ps["material"][:n] == 0
+    jet &= ps["x"][:n, 1] > 0.15
+    ps["v_half"][:n][jet] = [0.0, -1.0]
+    ps["v"][:n][jet] = [0.0, -1.0]
+    p0 = (ps["mass"][:n, None] * ps["v_half"][:n]).sum(axis=0)
+    for _ in range(200):
+        sim.step()
+    n = ps.n_owned
+    p1 = (ps["mass"][:n, None] * ps["v_half"][:n]).sum(axis=0)
+    scale = float((ps["mass"][:n] * np.linalg.norm(ps["v_half"][:n], axis=1)).sum())
+    assert np.abs(p1 - p0).max() <= 1e-12 * abs(p0[1])
+    assert scale > 0.1 * abs(p0[1])  # the water really hit the bed and moved it
+    soil = ps["material"][:n] == 1
+    assert np.abs(ps["v_half"][:n][soil]).max() > 1e-3
+
+
+def test_seepage_terms_only_with_water_and_soil():
+    """The plan: the coupling's terms and fields exist only in a scene with water and soil; the
+    water-only and soil-only plans are those of main before the coupling (no seepage name, field
+    or dt limit)."""
+    from verification.column_collapse import scene_at
+    from verification.common import scene_from_file
+
+    names = {"pore pressure at soil", "seepage on soil", "seepage on water"}
+    for scene in (scene_from_file("hydrostatic_tank_2d.toml"), scene_at(0.01, end_time=0.01)):
+        plan = build_plan(scene)
+        assert not names & {t.name for t in plan.terms}
+        assert names <= set(plan.absent)
+        assert not {"pore_pressure", "water_fraction"} & set(plan.fields)
+        assert "seepage drag" not in [c.name for c in plan.constraints]
+        assert (Phase.WATER, Phase.SOIL) not in plan.pairs and (Phase.SOIL, Phase.WATER) not in plan.pairs
+    box = lambda form: parse_scene(__import__("tomllib").loads(BOX.replace("{form}", form)), "box.toml")
+    mix, seed = build_plan(box("mixture")), build_plan(box("seed"))
+    assert names <= {t.name for t in mix.terms}
+    assert "pore pressure at soil" not in {t.name for t in seed.terms}  # no buoyancy in the seed's form
+    assert {"seepage on soil", "seepage on water"} <= {t.name for t in seed.terms}
+    for plan in (mix, seed):
+        assert (Phase.SOIL, Phase.WATER) in plan.pairs and (Phase.WATER, Phase.SOIL) in plan.pairs
+        assert "seepage drag" in [c.name for c in plan.constraints]
+    assert "pore_pressure" in mix.fields and "pore_pressure" not in seed.fields
+
+
+def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():
+    scene = parse_scene(__import__("tomllib").loads(BOX.replace("{form}", "mixture")), "box.toml")
+    text = explain(build_plan(scene), scene)
+    for expected in (
+        "pore pressure at soil: soil <- water",
+        "seepage on soil: soil <- water",
+        "seepage on water: water <- soil",
+        "C = n^2 gamma_w / k",
+        "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+        "Biot storage",
+        "seepage drag [dt <= cfl.drag / (lambda_soil + lambda_water)]",
+        "pore_pressure",
+    ):
+        assert expected in text, expected
+    seed = parse_scene(__import__("tomllib").loads(BOX.replace("{form}", "seed")), "box.toml")
+    assert "C = n gamma_w / k" in explain(build_plan(seed), seed)
+    refreshed = [ln for ln in text.splitlines() if "before 'seepage on soil'" in ln or "pore pressure" in ln]
+    assert refreshed  # the exchanged fields are listed
+
+
+@pytest.mark.parametrize(
+    "edit,key,reason",
+    [
+        ("porosity = 0.4\n", "materials.sand.porosity", "required when the scene has water"),
+        ("permeability = 1.0e-3\n", "materials.sand.permeability", "required when the scene has water"),
+        ("porosity = 1.0\n", "materials.sand.porosity", "less than 1"),
+        ("porosity = 0.0\n", "materials.sand.porosity", "greater than 0"),
+        ("permeability = 0.0\n", "materials.sand.permeability", "greater than 0"),
+        ("permeability = -1e-3\n", "materials.sand.permeability", "greater than 0"),
+    ],
+)
+def test_scene_refusals_name_the_key(tmp_path, edit, key, reason):
+    text = BOX.replace("{form}", "mixture")
+    original = "porosity = 0.4\n" if edit.startswith("porosity") else "permeability = 1.0e-3\n"
+    text = text.replace(original, "" if edit == original else edit)
+    path = write_scene(tmp_path, text)
+    r = subprocess.run(
+        SCOURSPH + ["run", str(path), "--out", str(tmp_path / "o")], capture_output=True, text=True, env=ENV
+    )
+    assert r.returncode == 2, r.stderr
+    assert key in r.stderr and reason in r.stderr and str(path) in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,127 @@
+"""The seepage verification cases (issue 10, item 4): CI-sized samples here, the default
+resolutions and the resolution studies nightly. Tolerances and their sources live in the case
+modules (verification/seepage_*.py)."""
+
+import numpy as np
+import pytest
+
+from solver.errors import BlowUpError
+from verification import (
+    seepage_bed_at_rest,
+    seepage_critical_gradient,
+    seepage_darcy,
+    seepage_terzaghi,
+)
+
+
+def _failed(res):
+    return [c.line() for c in res.checks if not c.passed]
+
+
+@pytest.mark.slow
+def test_bed_at_rest_carries_effective_stress_both_formulations(tmp_path):
+    """dx = 10 mm: the mixture carries gamma' z and hydrostatic pore pressure without drift; the
+    seed carries its dry weight (the case pins that derived value, docs/seepage.md)."""
+    res = seepage_bed_at_rest.run(10, out_dir=tmp_path)
+    assert res.figure.is_file()
+    assert not _failed(res), "\n".join(_failed(res))
+    assert abs(res.series["seed"]["slope_ratio"] - seepage_bed_at_rest.dry_weight_ratio()) < 0.1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("formulation", ["mixture", "seed"])
+def test_darcy_draining_column(formulation):
+    """Homogeneous draining column at dx = 10 mm: q = k i within 2 % (i = 1)."""
+    r = seepage_darcy.run_one(10, formulation, layered=False)
+    lay = r["layers"]["column"]
+    assert abs(lay["error"]) <= seepage_darcy.TOLERANCE, (lay["q"], lay["i"])
+    assert abs(lay["i"] - 1.0) < 0.1
+
+
+@pytest.mark.slow
+def test_darcy_stiff_drag_k_1e5_runs():
+    """Issue 10 item 2: k = 1e-5 m/s (drag rate ~ 4e5 1/s) runs stably under the drag's dt limit
+    and gives Darcy's flux; the run's cost (steps) is what the limit costs (docs/seepage.md)."""
+    t_end = 0.01
+    r = seepage_darcy.run_one(10, "mixture", layered=False, k=1e-5, t_end=t_end)
+    lay = r["layers"]["column"]
+    assert "drag" in r["dt_limit"]
+    assert np.isfinite(lay["q"]) and abs(lay["error"]) <= seepage_darcy.TOLERANCE, (lay["q"], lay["i"])
+
+
+@pytest.fixture(scope="module")
+def terzaghi_ci():
+    return seepage_terzaghi.run_one(10, "mixture")
+
+
+@pytest.mark.slow
+def test_terzaghi_consolidation_runs_to_tv1(terzaghi_ci):
+    """dx = 10 mm, mixture: from the undrained state to T_v = 1 without blow-up; the degree of
+    consolidation grows with T_v (the profile errors against the series are the case's checks)."""
+    degrees = [o["U"] for o in terzaghi_ci["tv"].values()]
+    assert list(terzaghi_ci["tv"]) == [0.1, 0.2, 0.5, 1.0]
+    assert all(b > a for a, b in zip(degrees, degrees[1:])), degrees
+    assert all(np.isfinite(o["u"]).all() for o in terzaghi_ci["tv"].values())
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="known shortfall (docs/seepage.md): the profile error exceeds the issue's 2 % goal at "
+    "T_v = 0.1 and 0.5 (3.5 %, 2.2 % at dx = 10 mm; 5.2 %, 2.5 % at 5 mm: not converging with dx)",
+)
+def test_terzaghi_meets_the_issue_goal_at_every_tv(terzaghi_ci):
+    errors = {tv: o["error"] for tv, o in terzaghi_ci["tv"].items()}
+    assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
+
+
+@pytest.mark.slow
+def test_critical_gradient_seed_does_not_heave_above_ic():
+    """dx = 5 mm, seed form at 1.1 i_c: no heave (no buoyancy: its skeleton carries its dry weight,
+    onset expected at 1.61 i_c)."""
+    seed = seepage_critical_gradient.run_one(12, 1.1, "seed")
+    assert seed["i"] > seepage_critical_gradient.critical_gradient()
+    assert not seed["heave"], (seed["i"], seed["rise_dx"])
+
+
+@pytest.mark.nightly
+@pytest.mark.xfail(
+    strict=True,
+    raises=BlowUpError,
+    reason="known defect (docs/seepage.md): in the mixture form pore water next to the baffle's wall "
+    "particles oscillates with growing amplitude and leaves the domain at ~0.14 s",
+)
+def test_critical_gradient_onset_mixture():
+    """dx = 5 mm: stable just below i_c, heave just above it (mixture)."""
+    ic = seepage_critical_gradient.critical_gradient()
+    below = seepage_critical_gradient.run_one(12, 0.95, "mixture")
+    above = seepage_critical_gradient.run_one(12, 1.08, "mixture")
+    assert not below["heave"] and below["i"] >= 0.9 * ic, (below["i"], below["rise_dx"])
+    assert above["heave"] and above["i"] <= 1.1 * ic, (above["i"], above["rise_dx"])
+
+
+# -- nightly: every case at its default resolution, all checks; the resolution studies ------------
+STUDIES = [seepage_bed_at_rest, seepage_darcy, seepage_terzaghi, seepage_critical_gradient]
+KNOWN = pytest.mark.xfail(reason="known shortfalls at the default resolution: docs/seepage.md, Verification")
+CASES = [
+    seepage_bed_at_rest,
+    seepage_darcy,
+    pytest.param(seepage_terzaghi, marks=KNOWN),
+    pytest.param(seepage_critical_gradient, marks=KNOWN),
+]
+
+
+@pytest.mark.nightly
+@pytest.mark.parametrize("case", CASES, ids=["bed_at_rest", "darcy", "terzaghi", "critical_gradient"])
+def test_nightly_case_at_default_resolution(case, tmp_path):
+    res = case.run(case.DEFAULT_RESOLUTION, out_dir=tmp_path)
+    assert not _failed(res), "\n".join(_failed(res))
+
+
+@pytest.mark.nightly
+@pytest.mark.parametrize("case", STUDIES, ids=["bed_at_rest", "darcy", "terzaghi", "critical_gradient"])
+def test_nightly_resolution_study(case, tmp_path):
+    from verification.common import study_failures
+
+    rows = case.study(out_dir=tmp_path)
+    assert not study_failures(rows)
