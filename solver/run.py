@@ -21,6 +21,7 @@ import numpy as np
 from . import __version__
 from .errors import BlowUpError
 from .output.atomic import atomic_write_text
+from .output.balance import VolumeLedger
 from .output.fields import OUTPUT_TO_ARRAY, requested_fields
 from .output.hdf5_writer import Hdf5Series
 from .output.render import render_snapshot
@@ -127,6 +128,7 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
             for w in writers:
                 w.write(sim.t, sim.step_count, fields)
 
+    ledger = VolumeLedger(sim, comm)  # inflow/outflow/stored and body leaks (output/balance.py)
     progress = Progress(scene.scene.end_time, enabled=not quiet and comm.is_root())
     status = "completed"
     t0 = time.perf_counter()
@@ -155,11 +157,13 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
             "wall_reflections": comm.sum(sim.wall_reflections),
             "simulated_time_s": sim.t,
         }
+        summary.update(ledger.report(sim, comm))
         if write and comm.is_root():
             for w in writers:
                 if isinstance(w, Hdf5Series):
                     w.finish(**summary)
             atomic_write_text(out_dir / "run.json", json.dumps(summary, indent=2) + "\n")
+            write_run_products(out_dir, scene, status)
             if scene.output.render and last:
                 render_snapshot(
                     last,
@@ -169,3 +173,14 @@ def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunR
                     domain=(scene.domain.min, scene.domain.max),
                 )
     return RunResult(out_dir, status, wall, sim.step_count, n, rate, sim)
+
+
+def write_run_products(out_dir, scene, status):
+    """Products computed from the written series: the scour profile, depth and plot of a scene with
+    soil (solver/output/scour.py). A failure here is reported, never fatal to the run."""
+    from .output.scour import write_scour_outputs
+
+    try:
+        write_scour_outputs(out_dir, scene)
+    except Exception as exc:  # noqa: BLE001 - a post-processing failure must not hide the run's outcome
+        print(f"scour measurement failed: {exc}", file=sys.stderr)

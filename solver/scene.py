@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .errors import SceneError
+from .scene_open import Body, Inlet, Outlet, check_open_boundaries, fill_inlet_defaults
 
 DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
 
@@ -229,6 +230,10 @@ class Scene(Strict):
     parallel: Parallel = Parallel()
     material_defaults: dict[str, dict] = {}
     artificial_viscosity_defaults: dict[str, ArtificialViscosity] = {}
+    inlets: list[Inlet] = []  # open boundaries and rigid bodies: solver/scene_open.py
+    outlets: list[Outlet] = []
+    bodies: list[Body] = []
+    inlet_defaults: dict = {}
 
     @property
     def dim(self):
@@ -290,8 +295,8 @@ def _check_consistency(s: Scene):
         )
     if not s.materials:
         raise _Inconsistent("materials", "at least one material is needed")
-    if not s.blocks:
-        raise _Inconsistent("blocks", "at least one particle block is needed")
+    if not s.blocks and not s.inlets:
+        raise _Inconsistent("blocks", "at least one particle block (or inlet) is needed")
     eps = 1e-9 * float(np.max(hi - lo))
     for k, block in enumerate(s.blocks):
         key = f"blocks[{k}]"
@@ -332,6 +337,8 @@ def _check_consistency(s: Scene):
     if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
     _check_seepage(s)
+    for key, reason in check_open_boundaries(s):
+        raise _Inconsistent(key, reason)
 
 
 def _check_seepage(s: Scene):
@@ -418,6 +425,7 @@ def _reason(err) -> str:
 def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
     merged = _fill_material_defaults(deep_merge(defaults, raw), defaults)
+    merged = fill_inlet_defaults(merged, defaults)
     try:
         return Scene.model_validate(merged)
     except ValidationError as exc:

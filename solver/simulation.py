@@ -47,6 +47,7 @@ class Simulation:
             gravity=np.asarray(scene.scene.gravity, float),
             images=self.plan.term(WallImages),
         )
+        self.ctx.owns = self.comm.owns
         self._phase_of_material = self.plan.materials.phase
         self.t = 0.0
         self.step_count = 0
@@ -57,6 +58,10 @@ class Simulation:
         self._rho_state = "rho_half" if "rho_half" in self.particles else "rho"  # density checked for NaN
         self.wall_reflections = 0  # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
+        if particles is None:
+            for term in self.plan.terms:
+                term.start(self.ctx)  # initial particles of terms (inlet buffers), on the replicated set
+        self._count_changes = any(t.changes_particles for t in self.plan.terms)
         self._start_half_steps()
         self.comm.setup(scene)  # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
@@ -224,7 +229,15 @@ class Simulation:
         if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance:
             self.rebuild()
         self._run(Stage.AFTER_DRIFT)
+        self._rebuild_if_requested()
         return dt
+
+    def _rebuild_if_requested(self):
+        """Terms that add or remove particles (inlets, outlets) ask for a rebuild: new rows get
+        their owner, ghosts, images and neighbours before the next step (collective)."""
+        requested, self.ctx.rebuild_requested = self.ctx.rebuild_requested, False
+        if self._count_changes and self.comm.any(requested):
+            self.rebuild()
 
     def advance_to(self, t_target, on_step=None):
         """Step until t == t_target exactly. The last two steps share the remaining time

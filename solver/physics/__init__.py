@@ -6,12 +6,15 @@ within a stage; a term that needs another's output comes after it.
 """
 
 from .artificial_stress import ArtificialStress
+from .bodies import BodyGuard
 from .equilibrium_soil_images import EquilibriumSoilImages
 from .fixed_particles import FixedParticles
 from .fluid_rates import FluidRates
 from .frictional_walls import FrictionalWalls
 from .gravity import Gravity
 from .hydrostatic_image_pressure import HydrostaticImagePressure
+from .inlet import Inlets
+from .outlet import Outlets
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
@@ -38,4 +41,7 @@ TERMS = (
     FixedParticles,
     SoilReturnMapping,
     SymplecticContinuity,
+    BodyGuard,  # after the drift: leaks counted and reflected before particles are added or removed
+    Inlets,
+    Outlets,
 )
