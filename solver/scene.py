@@ -224,7 +224,7 @@ class Scene(Strict):
     domain: Domain
     walls: Walls
     materials: dict[str, Material]
-    blocks: list[Block]
+    blocks: list[Block] = []  # at least one block or inlet (checked below)
     numerics: Numerics
     output: Output
     parallel: Parallel = Parallel()

@@ -68,8 +68,11 @@ class VolumeLedger:
                 "residual": float(residual),
                 "within_one_particle": bool(abs(residual) <= particle_volume),
             }
-        out["volume_balance"] = {"units": "m^3 (m^2 per unit depth in 2D)", "particle_volume": particle_volume,
-                                 "materials": balance}  # fmt: skip
+        out["volume_balance"] = {
+            "units": "m^3 (m^2 per unit depth in 2D)",
+            "particle_volume": particle_volume,
+            "materials": balance,
+        }
         if inlets is not None:
             out["inlets"] = inlets.summary()
         return out

@@ -46,7 +46,9 @@ class ScourGrid:
     @classmethod
     def for_layer(cls, x_lo, x_hi, z_base, z_top, dx, h, mirror_ends=True):
         bins = x_lo + (np.arange(int(round((x_hi - x_lo) / dx))) + 0.5) * dx
-        return cls(bins, float(z_base), float(z_top), float(dx), float(h), (x_lo, x_hi) if mirror_ends else ())
+        return cls(
+            bins, float(z_base), float(z_top), float(dx), float(h), (x_lo, x_hi) if mirror_ends else ()
+        )
 
 
 def surface_profile(x_soil: np.ndarray, grid: ScourGrid) -> np.ndarray:
@@ -153,7 +155,10 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
         return None
     soil_ids = [k for k, m in enumerate(scene.materials.values()) if m.model == "soil"]
     series = scour_series(
-        [(t, {"x": f["position"], "material": f["material"]}) for t, f in read_series(out_dir / "particles.h5")],
+        [
+            (t, {"x": f["position"], "material": f["material"]})
+            for t, f in read_series(out_dir / "particles.h5")
+        ],
         soil_ids,
         grid,
     )

@@ -280,7 +280,18 @@ class BodyGuard(Term):
     def run(self, ctx):
         ps, g = ctx.particles, self.geo
         count, deepest = guard_bodies(
-            ps.n_owned, ps["x"], ps["v"], ps["v_half"], g.verts, g.starts, g.a, g.t, g.n, g.length, g.body, True
+            ps.n_owned,
+            ps["x"],
+            ps["v"],
+            ps["v_half"],
+            g.verts,
+            g.starts,
+            g.a,
+            g.t,
+            g.n,
+            g.length,
+            g.body,
+            True,
         )
         self.leaks += count
         self.deepest = max(self.deepest, deepest)

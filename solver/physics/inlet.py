@@ -11,10 +11,13 @@ Geometry (2D): the section is the segment origin + a s, 0 <= s <= W, a the unit 
 n is its unit normal on the downstream side, d the unit direction of the velocity. Layers are
 lines parallel to the section, a distance dx apart along n, so a spacing ds = dx / (d . n) along
 d; each holds m = round(W / dx) particles at a spacing W / m across. A particle stands for the
-area V0 = dx W / m and carries m = rho0 V0 (volume = mass / rho0 exactly). With speed u along d
-the volume flux is u (d . n) W = q; a layer is released every dx / (u d . n) s, so the released
-volume follows q t to within one layer (m V0). Buffer particles carry rho0, p = 0: the pressure
-at the brink of a free overfall is atmospheric (Rouse 1936).
+area V0 = dx W / m (its cell, ds long along d) and carries mass rho0 V0 (volume = mass / rho0
+exactly). With speed u along d the volume flux is u (d . n) W = q. The front layer straddles the
+section; it is released when its cell has crossed it entirely (its centre ds/2 downstream), so
+the inserted volume, released cells plus the crossed fraction of the front layer's cells, is
+q t at every instant, and the released volume alone lags it by less than one layer (m V0).
+Buffer particles carry rho0, p = 0: the pressure at the brink of a free overfall is atmospheric
+(Rouse 1936).
 
 Without `width` the section is a free overfall's critical section, y_c = (q^2/g)^(1/3) (Chow
 1959, eq. 3-9), rounded to whole spacings so q stays exact; without `speed`, u = q / ((d . n) W).
@@ -22,7 +25,7 @@ Without `width` the section is a free overfall's critical section, y_c = (q^2/g)
 State. Everything that decides where particles are and which exist is in plain attributes that
 every MPI rank advances identically (the same dt): the front position A (distance along d moved
 since the set-up), the number of released layers, the released mass. Layer l, particle j sits at
-origin + (j + 1/2)(W/m) a + (A - (l + 1/2) ds) d; it is released when A >= (l + 1/2) ds. Its id is
+origin + (j + 1/2)(W/m) a + (A - (l + 1/2) ds) d; it is released when A >= (l + 1) ds. Its id is
 (inlet index + 1) 2^40 + l m + j: a reserved range per inlet, unique and global with no
 communication. A new particle is appended only by the rank that owns its position; `state()` and
 `restore()` give the checkpointable state.
@@ -112,8 +115,8 @@ class InletZone:
 
     # -- kinematics ------------------------------------------------------------------
     def layers_crossed(self) -> int:
-        """Layers whose centre line has crossed the section: A >= (l + 1/2) ds."""
-        return max(0, math.floor(self.advance / self.ds + 0.5 + 1e-12))
+        """Layers whose cells have crossed the section entirely: A >= (l + 1) ds."""
+        return max(0, math.floor(self.advance / self.ds + 1e-12))
 
     def crossed_volume(self) -> float:
         """The volume that has crossed the section since t = 0 by the kinematics (q t exactly)."""

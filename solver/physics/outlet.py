@@ -62,7 +62,9 @@ class Outlets(Term):
         self.removed_mass = np.zeros((len(self.names), n_mat))  # this rank's share
         self.removed_count = np.zeros(len(self.names), dtype=np.int64)
         self.equations = (
-            Equation("particles entering an outlet zone are removed; mass counted", "DualSPHysics outlet zones"),
+            Equation(
+                "particles entering an outlet zone are removed; mass counted", "DualSPHysics outlet zones"
+            ),
         )
 
     def explain(self):
