@@ -5,7 +5,8 @@ Volumes are mass / rho0 of each particle's material (a particle's mass never cha
 balance is exact bookkeeping: a particle lost, duplicated or created outside an inlet shows up).
 Per material:
 
-    inflow (released by inlets since t = 0) - outflow (removed by outlets) - (stored(t) - stored(0)) = 0
+    inflow (released by inlets since t = 0) - outflow (removed by outlets, and back-flow removed
+    from inlet buffers) - (stored(t) - stored(0)) = 0
 
 stored counts every particle of the material in the domain except inlet buffer particles (they
 belong to the inlet until released). The run reports the residual and whether it is within one
@@ -51,10 +52,13 @@ class VolumeLedger:
         if inlets is not None:
             for z in inlets.zones:
                 inflow[z.material] += z.released_mass / z.rho0  # replicated: not summed over ranks
-        outflow = np.zeros(len(mats.names))
+        local = np.zeros(len(mats.names))
         if outlets is not None:
-            local = outlets.removed_volume().sum(axis=0)
-            outflow = np.array([comm.sum(float(v)) for v in local])
+            local += outlets.removed_volume().sum(axis=0)
+        if inlets is not None:
+            for z in inlets.zones:
+                local[z.material] += z.backflow_mass / z.rho0  # water that flowed back into a buffer
+        outflow = np.array([comm.sum(float(v)) for v in local])
         stored = _stored(sim, comm)
         particle_volume = sim.scene.scene.spacing**sim.scene.dim
         balance = {}

@@ -15,9 +15,12 @@ Images. A local particle at signed distance 0 <= dist < reach outside an edge (o
 whose foot lies on the edge, gets an image mirrored across the edge's line: x' = R x + o with
 R = I - 2 n n^T and o = 2 (a . n) n (a a point of the edge); velocities v' = R v (free slip:
 normal part reversed, tangential kept) and tensors T' = R T R^T, which is eq. (23) for an
-axis-aligned edge. At a convex vertex (the breakwater's crown edge) a particle whose foot lies on
-neither edge gets no image: its kernel sum there is incomplete, as at a free surface. At a concave
-vertex between a body and a box wall the corner image (the image of an image) is missing.
+axis-aligned edge. A particle within reach of a convex vertex whose foot lies on neither edge
+(the wedge outside the corner) is mirrored through the vertex, x' = 2 v - x, as if the corner were
+rounded to a point: the wall normal there is m = (x - v)/|x - v|, so R = I - 2 m m^T (radial
+velocity reversed, tangential kept). Without it a jet aimed at a corner (a square turned 45
+degrees) drove particles into the body (tests/test_bodies.py). At a concave vertex between a body
+and a box wall the corner image (the image of an image) is missing.
 
 Leak guard. After each drift, every owned particle found inside a body is counted (the leak
 counter reported in run.json) and put back by reflecting it across the nearest edge, with its
@@ -41,6 +44,7 @@ class BodyGeometry:
     def __init__(self, scene):
         a, t, n, length, body = [], [], [], [], []
         verts, starts = [], [0]
+        corner, t_in, t_out = [], [], []  # convex vertices: position, arriving and leaving edge directions
         for k, b in enumerate(scene.bodies):
             v = np.asarray(b.vertices, float)
             if polygon_area(v) < 0:
@@ -56,8 +60,17 @@ class BodyGeometry:
                 n.append(np.array([e[1], -e[0]]) / ln)
                 length.append(ln)
                 body.append(k)
+            for i in range(len(v)):
+                e_in, e_out = v[i] - v[i - 1], v[(i + 1) % len(v)] - v[i]
+                if e_in[0] * e_out[1] - e_in[1] * e_out[0] > 0:  # left turn on a CCW polygon: convex
+                    corner.append(v[i])
+                    t_in.append(e_in / np.hypot(*e_in))
+                    t_out.append(e_out / np.hypot(*e_out))
             verts.append(v)
             starts.append(starts[-1] + len(v))
+        self.corner = np.array(corner, float).reshape(-1, 2)
+        self.t_in = np.array(t_in, float).reshape(-1, 2)
+        self.t_out = np.array(t_out, float).reshape(-1, 2)
         self.a = np.array(a, float).reshape(-1, 2)
         self.t = np.array(t, float).reshape(-1, 2)
         self.n = np.array(n, float).reshape(-1, 2)
@@ -69,11 +82,31 @@ class BodyGeometry:
 
 
 @kernel
-def find_body_images(x, n_local, reach, ea, et, en, elen, src, rot, off):
-    """Images of local rows across body edges (fill when the tables are big enough); returns the count."""
+def find_body_images(x, n_local, reach, ea, et, en, elen, cv, cin, cout, src, rot, off):
+    """Images of local rows across body edges and round convex corners (fill when the tables are
+    big enough); returns the count."""
     cap = src.shape[0]
     m = 0
     for i in range(n_local):
+        for c in range(cv.shape[0]):
+            r0 = x[i, 0] - cv[c, 0]
+            r1 = x[i, 1] - cv[c, 1]
+            r = np.sqrt(r0 * r0 + r1 * r1)
+            if r >= reach or r == 0.0:
+                continue
+            if r0 * cin[c, 0] + r1 * cin[c, 1] <= 0.0 or r0 * cout[c, 0] + r1 * cout[c, 1] >= 0.0:
+                continue  # not in the corner's wedge (past the arriving edge, before the leaving one)
+            if m < cap:
+                n0, n1 = r0 / r, r1 / r  # the wall normal of a corner rounded off to a point
+                src[m] = i
+                rot[m, 0, 0] = 1.0 - 2.0 * n0 * n0
+                rot[m, 0, 1] = -2.0 * n0 * n1
+                rot[m, 1, 0] = -2.0 * n0 * n1
+                rot[m, 1, 1] = 1.0 - 2.0 * n1 * n1
+                # x' = 2 v - x = R x + o
+                off[m, 0] = 2.0 * cv[c, 0] - x[i, 0] - (rot[m, 0, 0] * x[i, 0] + rot[m, 0, 1] * x[i, 1])
+                off[m, 1] = 2.0 * cv[c, 1] - x[i, 1] - (rot[m, 1, 0] * x[i, 0] + rot[m, 1, 1] * x[i, 1])
+            m += 1
         for e in range(ea.shape[0]):
             r0 = x[i, 0] - ea[e, 0]
             r1 = x[i, 1] - ea[e, 1]
@@ -210,20 +243,59 @@ class BodyImages:
         self.off = np.zeros((0, 2))
         self.n = 0
 
-    def rebuild(self, particles, first):
-        """Choose images of the local rows; they occupy rows [first, first + n). Returns n."""
+    def rebuild(self, particles, first, box=None):
+        """Choose images of the local rows; they occupy rows [first, first + n). Returns n.
+        box = (has_lo, lo, has_hi, hi) of the box walls: a body image within reach beyond a box wall
+        is mirrored across it too (the corner image where a body meets a box wall, as the box walls'
+        own corners have)."""
         g = self.geo
-        args = (particles["x"], particles.n_local, self.reach, g.a, g.t, g.n, g.length)
+        tables = (g.a, g.t, g.n, g.length, g.corner, g.t_in, g.t_out)
+        args = (particles["x"], particles.n_local, self.reach) + tables
         n = find_body_images(*args, self.src[:0], self.rot[:0], self.off[:0])
-        if n > len(self.src):
-            m = int(n * 1.25) + 16
-            self.src = np.zeros(m, dtype=np.int64)
-            self.rot = np.zeros((m, 2, 2))
-            self.off = np.zeros((m, 2))
+        self._room(n, 0)
         if n:
             find_body_images(*args, self.src, self.rot, self.off)
+        if box is not None and n:
+            n = self._box_corners(particles["x"], n, *box)
         self.n = n
         particles.ensure_capacity(first + n)
+        return n
+
+    def _room(self, m, keep):
+        """Tables with room for m images, keeping the first `keep`."""
+        if m <= len(self.src):
+            return
+        size = int(m * 1.25) + 16
+        for name in ("src", "rot", "off"):
+            old = getattr(self, name)
+            new = np.zeros((size,) + old.shape[1:], dtype=old.dtype)
+            new[:keep] = old[:keep]
+            setattr(self, name, new)
+
+    def _box_corners(self, x, n, has_lo, lo, has_hi, hi):
+        """Append, for each body image within reach of a box wall, its mirror across that wall."""
+        src, rot, off = self.src[:n].copy(), self.rot[:n].copy(), self.off[:n].copy()
+        pos = np.einsum("kab,kb->ka", rot, x[src]) + off
+        extra = []
+        for a in range(2):
+            for has, plane, near in (
+                (has_lo[a], lo[a], pos[:, a] - lo[a]),
+                (has_hi[a], hi[a], hi[a] - pos[:, a]),
+            ):
+                k = np.flatnonzero(near < self.reach) if has else []
+                if not len(k):
+                    continue
+                flip = np.ones(2)
+                flip[a] = -1.0
+                shift = np.zeros(2)
+                shift[a] = 2.0 * plane
+                extra.append((src[k], flip[None, :, None] * rot[k], flip * off[k] + shift))
+        m = n + sum(len(e[0]) for e in extra)
+        self._room(m, n)
+        for s_, r_, o_ in extra:
+            k = len(s_)
+            self.src[n : n + k], self.rot[n : n + k], self.off[n : n + k] = s_, r_, o_
+            n += k
         return n
 
     def refresh(self, particles, names, specs, first):
@@ -258,6 +330,7 @@ class BodyGuard(Term):
         super().__init__()
         self.geo = BodyGeometry(scene)
         self.writes = ("x", "v", "v_half")
+        self.fix = True  # reflect leaked particles out (tests switch it off to see a leak uncorrected)
         self.leaks = 0  # this rank's count of particle-steps found inside a body
         self.deepest = 0.0
         self.equations = (
@@ -291,7 +364,7 @@ class BodyGuard(Term):
             g.n,
             g.length,
             g.body,
-            True,
+            self.fix,
         )
         self.leaks += count
         self.deepest = max(self.deepest, deepest)

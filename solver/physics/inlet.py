@@ -95,6 +95,7 @@ class InletZone:
         self.prefilled = self.released  # of which were placed by the prefill at t = 0
         self.released_mass = 0.0  # since t = 0 (the prefill is initial state, not inflow)
         self.elapsed = 0.0  # time integrated by this inlet since t = 0
+        self.backflow_mass = 0.0  # free water that flowed back into the buffer, removed (this rank's share)
 
     # -- state -----------------------------------------------------------------------
     def state(self) -> dict:
@@ -104,6 +105,7 @@ class InletZone:
             "prefilled": self.prefilled,
             "released_mass": self.released_mass,
             "elapsed": self.elapsed,
+            "backflow_mass": self.backflow_mass,
         }
 
     def restore(self, state: dict):
@@ -112,6 +114,7 @@ class InletZone:
         self.prefilled = int(state["prefilled"])
         self.released_mass = float(state["released_mass"])
         self.elapsed = float(state["elapsed"])
+        self.backflow_mass = float(state.get("backflow_mass", 0.0))
 
     # -- kinematics ------------------------------------------------------------------
     def layers_crossed(self) -> int:
@@ -121,6 +124,17 @@ class InletZone:
     def crossed_volume(self) -> float:
         """The volume that has crossed the section since t = 0 by the kinematics (q t exactly)."""
         return (self.advance - self.speed * self.prefill_time) * self.cos * self.width
+
+    def in_buffer_zone(self, x):
+        """Mask of positions the buffer will overrun: behind, or within half a spacing of, the front
+        buffer layer's centre line (along d), across the section's width plus half a spacing each side."""
+        r = x - self.origin
+        xi = (r @ self.n) / self.cos
+        s = r @ self.a - xi * (self.d @ self.a)
+        half = 0.5 * self.dx
+        front = self.advance - (self.released + 0.5) * self.ds
+        inside = (xi < front + 0.5 * self.ds) & (xi > -(self.layers + 0.5) * self.ds)
+        return inside & (s > -half) & (s < self.width + half)
 
     def lateral(self):
         return (np.arange(self.m) + 0.5) * (self.width / self.m)
@@ -236,6 +250,7 @@ class Inlets(Term):
         for z in self.zones:
             z.advance += z.speed * ctx.dt
             z.elapsed += ctx.dt
+            added |= self._remove_backflow(ps, z)
             self._place_buffer(ps, z)
             crossed = z.layers_crossed()
             while z.released < crossed:
@@ -249,6 +264,19 @@ class Inlets(Term):
                 added = True
         if added:
             ctx.request_rebuild()
+
+    def _remove_backflow(self, ps, z):
+        """Free particles that flowed back into the buffer zone, or that the front layer is about to
+        overrun (within half a spacing of it), are removed and counted, as DualSPHysics does with
+        fluid entering an inlet zone: the buffer moves kinematically, a velocity inlet ignores the
+        pressure ahead of it, and a free particle in its way would be crushed."""
+        n = ps.n_owned
+        back = (ps["inlet_buffer"][:n] < 0) & z.in_buffer_zone(ps["x"][:n])
+        if not back.any():
+            return False
+        z.backflow_mass += float(ps["mass"][:n][back].sum())
+        ps.remove_owned(~back)
+        return True
 
     def _place_buffer(self, ps, z):
         """Buffer particles at their exact kinematic state (the kick and drift moved them with the
@@ -288,6 +316,7 @@ class Inlets(Term):
                 "released_volume": z.released_mass / z.rho0,
                 "crossed_volume_q_t": z.crossed_volume(),
                 "prefill_volume": z.prefilled * z.m * z.volume,
+                "backflow_volume_this_rank": z.backflow_mass / z.rho0,
                 "state": z.state(),
             }
         return out

@@ -182,7 +182,8 @@ class ImageWalls:
                 self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi
             )
         particles.ensure_capacity(n_local + n)
-        nb = self.bodies.rebuild(particles, n_local + n) if self.bodies is not None else 0
+        box = (self.has_lo, self.lo, self.has_hi, self.hi) if self.any else None
+        nb = self.bodies.rebuild(particles, n_local + n, box) if self.bodies is not None else 0
         particles.n_image = n + nb
 
     def tables(self):
