@@ -18,7 +18,9 @@ NonNegative = Annotated[float, Field(ge=0)]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # as solver/scene.py's Strict (which imports this module): no bool -> number or number -> str
+    # coercion, finite floats only
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class Inlet(_Strict):
@@ -41,6 +43,13 @@ class Inlet(_Strict):
     prefill_time: NonNegative  # s of inflow already in free flight at t = 0 (defaults.toml)
 
 
+class InletDefaults(_Strict):
+    """`[inlet_defaults]` (solver/defaults.toml): what every inlet takes unless it sets it."""
+
+    layers: Annotated[int, Field(ge=1)]
+    prefill_time: NonNegative
+
+
 class Outlet(_Strict):
     """A deletion zone (a box): particles whose centre enters it are removed and counted."""
 
@@ -58,17 +67,18 @@ class Body(_Strict):
     vertices: list[list[float]]
 
 
-def fill_inlet_defaults(raw: dict, defaults: dict) -> dict:
-    """Each `[[inlets]]` entry gets the `[inlet_defaults]` values it does not set."""
-    inlets = raw.get("inlets")
-    if not isinstance(inlets, list):
-        return raw
-    raw = copy.deepcopy(raw)
-    for item in raw["inlets"]:
+def fill_inlet_defaults(merged: dict) -> dict:
+    """Each `[[inlets]]` entry gets the merged `[inlet_defaults]` values it does not set (a scene's
+    own `[inlet_defaults]` are honoured). Anything of the wrong shape is left for the schema to refuse."""
+    inlets, defaults = merged.get("inlets"), merged.get("inlet_defaults")
+    if not isinstance(inlets, list) or not isinstance(defaults, dict):
+        return merged
+    merged = copy.deepcopy(merged)
+    for item in merged["inlets"]:
         if isinstance(item, dict):
-            for key, value in defaults.get("inlet_defaults", {}).items():
+            for key, value in defaults.items():
                 item.setdefault(key, value)
-    return raw
+    return merged
 
 
 def check_open_boundaries(s) -> list[tuple[str, str]]:
@@ -100,6 +110,9 @@ def check_open_boundaries(s) -> list[tuple[str, str]]:
             return [(f"{key}.origin", "lies outside the domain")]
         if np.linalg.norm(s.scene.gravity) == 0 and inlet.width is None:
             return [(f"{key}.width", "required without gravity (the critical depth needs g)")]
+        bad = _inlet_extent(s, inlet, lo, hi, eps)
+        if bad:
+            return [(f"{key}.{bad[0]}", bad[1])]
     for k, outlet in enumerate(s.outlets):
         key = f"outlets[{k}]"
         if len(outlet.min) != dim or len(outlet.max) != dim:
@@ -113,12 +126,58 @@ def check_open_boundaries(s) -> list[tuple[str, str]]:
         key = f"bodies[{k}]"
         if dim != 2:
             return [(f"{key}", "bodies are implemented in 2D only")]
-        v = np.asarray(body.vertices, float)
-        if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3:
+        if len(body.vertices) < 3 or any(len(p) != 2 for p in body.vertices):
             return [(f"{key}.vertices", "needs three or more [x, y] points")]
+        v = np.asarray(body.vertices, float)
+        if not np.all(np.isfinite(v)):
+            return [(f"{key}.vertices", "must be finite")]
         if abs(polygon_area(v)) < eps * eps:
             return [(f"{key}.vertices", "the polygon has no area")]
+        if np.any(np.hypot(*(np.roll(v, -1, axis=0) - v).T) <= eps):
+            return [(f"{key}.vertices", "two consecutive vertices coincide (an edge of zero length)")]
     return []
+
+
+def _inlet_extent(s, inlet, lo, hi, eps):
+    """(key, reason) if the section, its buffer or its prefill does not fit the domain, or the
+    inflow is faster than the water's sound speed; else None. These bound the particles an inlet
+    creates (a huge q, width, layer count or prefill time is refused, not allocated)."""
+    dx = s.scene.spacing
+    d = np.asarray(inlet.direction, float) / np.linalg.norm(inlet.direction)
+    a = np.array([-d[1], d[0]]) if inlet.across is None else np.asarray(inlet.across, float)
+    a = a / np.linalg.norm(a)
+    cos = abs(a[0] * d[1] - a[1] * d[0])  # d . n, n the section's unit normal
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        if inlet.width is None:
+            g = float(np.hypot(*s.scene.gravity))
+            width = max(1.0, round(min((inlet.discharge**2 / g) ** (1.0 / 3.0) / dx, 1e18))) * dx
+            key = "discharge"
+        else:
+            width, key = inlet.width, "width"
+        o = np.asarray(inlet.origin, float)
+        ends = np.array([o, o + width * a])
+        if not np.all(np.isfinite(ends)) or np.any(ends < lo - eps) or np.any(ends > hi + eps):
+            return key, f"the section ({width:.4g} m wide along `across`) must lie inside the domain"
+        back = ends - inlet.layers * (dx / cos) * d
+        if np.any(back < lo - eps) or np.any(back > hi + eps):
+            return "layers", (
+                f"the buffer ({inlet.layers} layers of {dx / cos:.4g} m behind the section) must lie inside "
+                "the domain"
+            )
+        speed = inlet.speed if inlet.speed is not None else inlet.discharge / (cos * width)
+        water = s.materials[inlet.material]
+        if not speed <= water.sound_speed:
+            return "speed" if inlet.speed is not None else "discharge", (
+                f"gives an inflow speed {speed:.4g} m/s above the water's sound speed "
+                f"{water.sound_speed:.4g} m/s (weakly compressible SPH needs the flow well below it)"
+            )
+        diagonal = float(np.linalg.norm(hi - lo))
+        if speed * inlet.prefill_time > diagonal:
+            return "prefill_time", (
+                f"{inlet.prefill_time:g} s at {speed:.4g} m/s carries the water farther than the domain's "
+                f"diagonal ({diagonal:.4g} m)"
+            )
+    return None
 
 
 def polygon_area(v) -> float:

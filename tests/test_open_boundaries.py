@@ -218,6 +218,19 @@ def test_bad_open_boundaries_name_the_key(edit, key):
     assert key in str(info.value)
 
 
+def test_command_line_override_of_an_inlet_key():
+    """--set inlets.0.discharge=0.08 changes q of the shipped scour scene (the study's knob); a bad
+    index or a whole array is refused naming the key."""
+    from solver.scene import SCENES_DIR, load_scene
+
+    path = SCENES_DIR / "scour_dry.toml"
+    assert load_scene(path, ["inlets.0.discharge=0.08"]).inlets[0].discharge == 0.08
+    for bad in ("inlets.3.discharge=0.08", "inlets.x.discharge=0.08", "inlets=1", "domain.min.0=0.1"):
+        with pytest.raises(SceneError) as info:
+            load_scene(path, [bad])
+        assert bad.split("=")[0] in str(info.value)
+
+
 def test_run_json_reports_the_balance(tmp_path):
     """scoursph run: the volume balance and the inlet figures in run.json and the HDF5 metadata."""
     from solver.output.hdf5_writer import read_metadata

@@ -55,9 +55,11 @@ import numpy as np
 from .common import (
     GCI_SAFETY,
     RESULTS,
+    SCENES,
     CaseResult,
     Check,
     machine_load,
+    reference_case_dir,
     report,
     richardson,
     save_figure,
@@ -66,12 +68,11 @@ from .common import (
     write_csv,
 )
 
-ROOT = Path(__file__).resolve().parent.parent
-SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
+SCENE = SCENES / "column_collapse_2d.toml"
 DATA = (
     Path(os.environ.get("SCOURSPH_REFERENCE_DATA", Path(__file__).with_name("data"))) / "bui2008_profile.csv"
 )
-LIGGGHTS = ROOT / "reference_cases" / "liggghts_column_collapse_2d" / "data"
+LIGGGHTS = reference_case_dir("liggghts_column_collapse_2d") / "data"
 SOURCE = (
     "Bui, Fukagawa, Sako & Ohno (2008), Int. J. Numer. Anal. Meth. Geomech. 32:1537-1570, "
     "aluminium-bar collapse; digitised data bui2008_profile.csv"

@@ -11,8 +11,9 @@ z_s is the lowest height above the base at which phi falls below 1/2, scanning u
 base (linear interpolation between samples dx/20 apart); if phi < 1/2 already at the base, the
 hole has reached it and z_s is the base. An isolated grain contributes at most
 V W(0) = dx^2 (10 / 7 pi h^2) = 0.27 (h = 1.3 dx) to phi, less than 1/2, and it lies above the
-first crossing anyway: one grain thrown up cannot move z_s. A grain resting on the surface lifts
-it by a fraction of dx (tests/test_scour_measure.py measures it).
+first crossing anyway: one grain thrown up beyond the top row's kernel support cannot move z_s.
+Closer grains lift it by a fraction of dx (tests/test_scour_measure.py: 0.41 dx for a grain resting
+on the bed, 0.26 dx for one a spacing above it).
 
 Derived per output time, with z_s0 the surface of the first snapshot by the same rule:
   d(t) = max_x (z_s0(x) - z_s(x, t)) (the scour depth), x_deepest where it is reached,

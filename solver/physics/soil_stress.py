@@ -52,12 +52,14 @@ def _scaled(r, s0, s1, s2, s3, s4, s5):
 
 @kernel
 def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi):
-    """Admissible (p, s) from a trial state; returns (p, s0..s5, plastic volumetric strain increment).
+    """Admissible (p, s) from a trial state; returns (p, s0..s5, dvol, dcrack): dvol the plastic
+    volumetric strain increment (dilation positive), dcrack the part of it that is tension cracking.
 
-    The returned volumetric increment (dilation positive) is what keeps p = K (rho/rho0 - 1 + eps_vp)
-    incremental: a cracked (stretched) particle restarts from the cut-off when recompressed,
-    as in the rate form dsigma/dt = K tr(eps) delta + ... of Bui et al. (2008), instead of
-    carrying a tensile deficit that makes loosened soil flow like a zero-pressure fluid.
+    The volumetric increment is what keeps p = K (rho/rho0 - 1 + eps_vp) incremental: a cracked
+    (stretched) particle restarts from the cut-off when recompressed, as in the rate form
+    dsigma/dt = K tr(eps) delta + ... of Bui et al. (2008), instead of carrying a tensile deficit
+    that makes loosened soil flow like a zero-pressure fluid. soil_stress_state puts the cracking
+    part into the density, not into eps_vp (see there).
     Mohr-Coulomb (seed eq. 16): tension cut-off p >= -c / tan(phi) (no tensile strength of a
     cohesionless soil), then s scaled by s_f / sqrt(J2) when sqrt(J2) > s_f = c + p tan(phi).
     Drucker-Prager (Bui et al. 2008, f = alpha_phi I1 + sqrt(J2) - k_c, I1 = -3p):
@@ -67,9 +69,10 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
       (plastic dilation 3 alpha_psi dl raises p in a confined state); lands on f = 0 exactly.
     """
     dvol = 0.0
+    dcrack = 0.0
     if model == MOHR_COULOMB:
         if tan_phi > 0.0 and p < -cohesion / tan_phi:
-            dvol = (-cohesion / tan_phi - p) / bulk
+            dvol = dcrack = (-cohesion / tan_phi - p) / bulk
             p = -cohesion / tan_phi
         sf = max(cohesion + p * tan_phi, 0.0)
         j = sqrt_j2(s0, s1, s2, s3, s4, s5)
@@ -78,7 +81,7 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
     elif model == DRUCKER_PRAGER:
         p_apex = -k_c / (3.0 * alpha_phi) if alpha_phi > 0.0 else -1e300
         if p < p_apex:
-            dvol = (p_apex - p) / bulk
+            dvol = dcrack = (p_apex - p) / bulk
             p = p_apex
             s0 = s1 = s2 = s3 = s4 = s5 = 0.0
         else:
@@ -89,7 +92,7 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
                 p += 3.0 * bulk * alpha_psi * dl
                 dvol = 3.0 * alpha_psi * dl
                 s0, s1, s2, s3, s4, s5 = _scaled(max(j - shear * dl, 0.0) / j, s0, s1, s2, s3, s4, s5)
-    return p, s0, s1, s2, s3, s4, s5, dvol
+    return p, s0, s1, s2, s3, s4, s5, dvol, dcrack
 
 
 @kernel(parallel=True)
@@ -113,14 +116,25 @@ def soil_stress_state(
 ):
     """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
     return mapping; writes p to mean_stress and the admissible s in place. With
-    update_history (after the leap-frog kick) the plastic dilation is accumulated."""
+    update_history (after the leap-frog kick, on the half-step density) the plastic dilation
+    (psi) is accumulated in eps_vp, and tension cracking resets the density instead:
+        rho <- rho + rho0 dcrack,   i.e. rho = rho0 (1 + p_cut / K - eps_vp),
+    the density at which eq. (17) gives the cut-off pressure p_cut. A crack opens between
+    particles; the material keeps the density of its stress-free (cut-off) state. Carried in
+    eps_vp instead (as before issue 14), the crack opening let a detached grain's density fall
+    without bound: continuity (seed eq. 6) keeps lowering it while neighbours recede, and the
+    cut-off keeps p = p_cut whatever rho is. At rho -> 0 the particle's volume m/rho and
+    sigma/rho^2 grow without bound, and at rho_i + rho_j < 0 the artificial viscosity
+    (eq. 19, 2 / (rho_i + rho_j)) pulls a particle into its image instead of resisting: the
+    issue-14 column collapses ended so. p evolves exactly as before (continuity's rate does not
+    depend on rho_i); only the density used as a volume and in eqs. (19), (20) changes."""
     for t in prange(rows.shape[0]):
         i = rows[t]
         m = material[i]
         e = rho[i] / rho0[m] - 1.0
         if eps_vp is not None:
             e += eps_vp[i]
-        p, a0, a1, a2, a3, a4, a5, dvol = return_map(
+        p, a0, a1, a2, a3, a4, a5, dvol, dcrack = return_map(
             bulk[m] * e,
             s[i, 0],
             s[i, 1],
@@ -145,7 +159,10 @@ def soil_stress_state(
         s[i, 4] = a4
         s[i, 5] = a5
         if eps_vp is not None and update_history:
-            eps_vp[i] += dvol
+            if dcrack > 0.0:  # tension cracking (dvol = dcrack): back to the cut-off density
+                rho[i] += rho0[m] * dcrack
+            else:  # plastic dilatancy (psi)
+                eps_vp[i] += dvol
 
 
 def yield_excess(rows, mean_stress, s, material, soil):
@@ -249,7 +266,10 @@ class SoilReturnMapping(Term):
     def __init__(self, materials):
         super().__init__()
         self.constitution = Constitution(materials)
-        self.writes = ("stress_dev_half", "mean_stress") + (("eps_vp",) if self.constitution.plastic else ())
+        # tension cracking resets the half-step density (soil_stress_state)
+        self.writes = ("stress_dev_half", "mean_stress") + (
+            ("eps_vp", "rho_half") if self.constitution.plastic else ()
+        )
         self.equations = (
             Equation("return mapping of s at n+1/2", "seed eqs. (16), (27); Bui et al. (2008)"),
         )
