@@ -120,6 +120,8 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1):
         run_scene(scene, out, quiet=True, overwrite=True)
     except BlowUpError as exc:
         status = f"blew up: {exc}"
+    except KeyboardInterrupt:  # stopped (SIGINT) for want of time: run.json and scour.csv are written
+        status = "stopped"
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
     report = json.loads((out / "run.json").read_text())
     summary = {
@@ -429,9 +431,14 @@ def _plot_snapshots(plt, path, q=0.11):
 
 
 # -- driver ---------------------------------------------------------------------------------------
-def study_cases(end_time, qs=Q_STUDY, fine=(("dry", 0.11), ("saturated", 0.11))):
+FINE = (("dry", 0.11), ("saturated", 0.11))  # the 2.5 mm resolution check
+
+
+def study_cases(end_time, qs=Q_STUDY, fine=FINE):
     """(soil, q, dx, end_time, length) of the affordable study: 5 mm at qs, 2.5 mm for `fine`."""
-    cases = [(soil, q, DX, end_time, 0.25) for soil in SOILS for q in qs]
+    cases = [
+        (soil, q, DX, end_time, 0.25) for q in sorted(qs, key=lambda q: (q != max(qs), q)) for soil in SOILS
+    ]
     cases += [(soil, q, DX_FINE, end_time, 0.25) for soil, q in fine]
     return cases
 
@@ -471,6 +478,7 @@ def main(argv=None):
     a = sub.add_parser("all", help="every missing run of the affordable study, then the report")
     a.add_argument("--end", type=float, default=END_TIME)
     a.add_argument("--jobs", type=int, default=2)
+    a.add_argument("--coarse-only", action="store_true", help="only the 5 mm runs")
     lg = sub.add_parser("long", help="the full-length study: all six q, 5 and 2.5 mm, LONG_END s (hours)")
     lg.add_argument("--end", type=float, default=LONG_END)
     lg.add_argument("--jobs", type=int, default=2)
@@ -481,7 +489,7 @@ def main(argv=None):
         s = run_case(args.soil, args.q, args.dx, args.end, args.length, args.threads)
         return 0 if s["status"] == "completed" else 1
     if args.cmd == "all":
-        run_all(study_cases(args.end), args.jobs)
+        run_all(study_cases(args.end, fine=() if args.coarse_only else FINE), args.jobs)
     elif args.cmd == "long":
         run_all(
             [(s, q, dx, args.end, args.length) for dx in (DX, DX_FINE) for s in SOILS for q in Q_ALL],
