@@ -57,7 +57,7 @@ class VolumeLedger:
             local += outlets.removed_volume().sum(axis=0)
         if inlets is not None:
             for z in inlets.zones:
-                local[z.material] += z.backflow_mass / z.rho0  # water that flowed back into a buffer
+                local += z.backflow_mass / mats.rho0  # what flowed back into a buffer, per material
         outflow = np.array([comm.sum(float(v)) for v in local])
         stored = _stored(sim, comm)
         particle_volume = sim.scene.scene.spacing**sim.scene.dim

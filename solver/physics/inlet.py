@@ -95,7 +95,10 @@ class InletZone:
         self.prefilled = self.released  # of which were placed by the prefill at t = 0
         self.released_mass = 0.0  # since t = 0 (the prefill is initial state, not inflow)
         self.elapsed = 0.0  # time integrated by this inlet since t = 0
-        self.backflow_mass = 0.0  # free water that flowed back into the buffer, removed (this rank's share)
+        # mass per material of free particles that flowed back into the buffer, removed (this rank's
+        # share): mostly water, but a grain thrown up into the buffer is removed too (and counted as soil)
+        self.backflow_mass = np.zeros(len(materials.names))
+        self.rho0_all = np.asarray(materials.rho0, float)
 
     # -- state -----------------------------------------------------------------------
     def state(self) -> dict:
@@ -105,7 +108,7 @@ class InletZone:
             "prefilled": self.prefilled,
             "released_mass": self.released_mass,
             "elapsed": self.elapsed,
-            "backflow_mass": self.backflow_mass,
+            "backflow_mass": self.backflow_mass.tolist(),
         }
 
     def restore(self, state: dict):
@@ -114,7 +117,12 @@ class InletZone:
         self.prefilled = int(state["prefilled"])
         self.released_mass = float(state["released_mass"])
         self.elapsed = float(state["elapsed"])
-        self.backflow_mass = float(state.get("backflow_mass", 0.0))
+        back = state.get("backflow_mass", 0.0)
+        if np.ndim(back) == 0:  # an older state: water only
+            self.backflow_mass = np.zeros(len(self.rho0_all))
+            self.backflow_mass[self.material] = float(back)
+        else:
+            self.backflow_mass = np.array(back, float)
 
     # -- kinematics ------------------------------------------------------------------
     def layers_crossed(self) -> int:
@@ -274,7 +282,9 @@ class Inlets(Term):
         back = (ps["inlet_buffer"][:n] < 0) & z.in_buffer_zone(ps["x"][:n])
         if not back.any():
             return False
-        z.backflow_mass += float(ps["mass"][:n][back].sum())
+        z.backflow_mass += np.bincount(
+            ps["material"][:n][back], weights=ps["mass"][:n][back], minlength=len(z.backflow_mass)
+        )
         ps.remove_owned(~back)
         return True
 
@@ -316,7 +326,7 @@ class Inlets(Term):
                 "released_volume": z.released_mass / z.rho0,
                 "crossed_volume_q_t": z.crossed_volume(),
                 "prefill_volume": z.prefilled * z.m * z.volume,
-                "backflow_volume_this_rank": z.backflow_mass / z.rho0,
+                "backflow_volume_this_rank": (z.backflow_mass / z.rho0_all).tolist(),
                 "state": z.state(),
             }
         return out
