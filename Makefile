@@ -3,8 +3,8 @@ PYTHON ?= python3.11
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-SCENE  ?= scenes/dam_break_2d.toml
-OUT    ?= runs/dam_break_2d
+SCENE  ?= scenes/scour_saturated.toml
+OUT    ?= runs/scour_saturated
 
 .PHONY: run test lint format bench verify references clean
 
@@ -14,7 +14,8 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-## make run: set up .venv and run the default scene (2D dam break)
+## make run: set up .venv and run the main job, the seed's saturated scour at q = 0.11 for its 0.025 s
+## (scour depth in runs/scour_saturated/scour.csv, scour.png); SCENE=scenes/dam_break_2d.toml for the dam break
 run: $(STAMP)
 	$(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite
 

@@ -198,6 +198,11 @@ def _run(args):
             f"outputs in {out}/: particles.h5 (HDF5 series), particles.pvd (ParaView), final.png, "
             "scene.toml, run.json"
         )
+        if (out / "scour.csv").is_file():
+            print(
+                f"scour: {out}/scour.csv (depth, deepest point, eroded area per output time), "
+                f"{out}/scour_profiles.csv (surface z_s(x, t)), {out}/scour.png"
+            )
     return 0
 
 

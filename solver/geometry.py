@@ -73,6 +73,8 @@ def overlapping_blocks(scene: Scene):
     """((i, j), n): a pair of blocks i < j that put particles at n shared lattice sites, or
     None. Blocks that merely touch share no site: a lattice point belongs to the block whose
     [min, max) holds it."""
+    if not scene.blocks:  # a scene filled by inlets only
+        return None
     origin = np.asarray(scene.domain.min, dtype=float)
     dx = scene.scene.spacing
     idx = [_lattice_index(block_points(b, scene), origin, dx) for b in scene.blocks]

@@ -24,6 +24,7 @@ from . import __version__
 from .errors import BlowUpError
 from .interrupt import Interrupted, StopSignals, exit_status
 from .output.atomic import atomic_write_text
+from .output.balance import VolumeLedger
 from .output.checkpoint import Checkpointer, open_restart, resume_outputs
 from .output.fields import OUTPUT_TO_ARRAY, requested_fields
 from .output.hdf5_writer import Hdf5Series
@@ -199,6 +200,7 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
             },
             "segments": segments + [done],
             "metadata": meta,
+            "volume_stored0": None if ledger.stored0 is None else ledger.stored0.tolist(),
         }
 
     def snapshot():
@@ -211,6 +213,8 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
             for w in writers:
                 w.write(sim.t, sim.step_count, fields)
 
+    # inflow/outflow/stored and body leaks (output/balance.py); a restart keeps the run's stored(0)
+    ledger = VolumeLedger(sim, comm, stored0=resume.run.get("volume_stored0") if resume else None)
     progress = Progress(scene.scene.end_time, enabled=not quiet and comm.is_root(), first_step=sim.step_count)
     checkpoints = Checkpointer(
         scene.output, out_dir, comm, scene_json, run_state, stops=stops, enabled=write, t=sim.t
@@ -267,11 +271,13 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
         }
         summary["segments"] = run_state(sim, status)["segments"]
         summary["wall_time_total_s"] = sum(s["wall_time_s"] for s in summary["segments"])
+        summary.update(ledger.report(sim, comm))
         if write and comm.is_root():
             for w in writers:
                 if isinstance(w, Hdf5Series):
                     w.finish(**summary)
             atomic_write_text(out_dir / "run.json", json.dumps(summary, indent=2) + "\n")
+            write_run_products(out_dir, scene, status)
             if scene.output.render and last and not status.startswith("interrupted"):  # be quick
                 render_snapshot(
                     last,
@@ -283,3 +289,14 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
         if comm.is_root() and summary["wall_reflections"] > 0:
             print(reflection_warning(summary["wall_reflections"]), file=sys.stderr)
     return RunResult(out_dir, status, wall, sim.step_count, n, rate, sim)
+
+
+def write_run_products(out_dir, scene, status):
+    """Products computed from the written series: the scour profile, depth and plot of a scene with
+    soil (solver/output/scour.py). A failure here is reported, never fatal to the run."""
+    from .output.scour import write_scour_outputs
+
+    try:
+        write_scour_outputs(out_dir, scene)
+    except Exception as exc:  # noqa: BLE001 - a post-processing failure must not hide the run's outcome
+        print(f"scour measurement failed: {exc}", file=sys.stderr)

@@ -33,6 +33,14 @@ from pydantic import (
 )
 
 from .errors import SceneError
+from .scene_open import (
+    Body,
+    Inlet,
+    InletDefaults,
+    Outlet,
+    check_open_boundaries,
+    fill_inlet_defaults,
+)
 
 DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
 SCENES_DIR = Path(__file__).with_name("scenes")  # the scenes shipped with the package
@@ -347,12 +355,16 @@ class Scene(Strict):
     domain: Domain
     walls: Walls
     materials: dict[str, Material]
-    blocks: list[Block]
+    blocks: list[Block] = []  # at least one block or inlet (checked below)
     numerics: Numerics
     output: Output
     parallel: Parallel = Parallel()
     material_defaults: MaterialDefaults = MaterialDefaults()
     artificial_viscosity_defaults: dict[Literal["water", "soil"], ArtificialViscosity] = {}
+    inlets: list[Inlet] = []  # open boundaries and rigid bodies: solver/scene_open.py
+    outlets: list[Outlet] = []
+    bodies: list[Body] = []
+    inlet_defaults: InletDefaults  # values in defaults.toml
 
     @property
     def dim(self):
@@ -414,8 +426,8 @@ def _check_consistency(s: Scene):
         )
     if not s.materials:
         raise _Inconsistent("materials", "at least one material is needed")
-    if not s.blocks:
-        raise _Inconsistent("blocks", "at least one particle block is needed")
+    if not s.blocks and not s.inlets:
+        raise _Inconsistent("blocks", "at least one particle block (or inlet) is needed")
     has_soil = any(isinstance(m, Soil) for m in s.materials.values())
     if not has_soil:
         for key, value in (
@@ -500,6 +512,8 @@ def _check_consistency(s: Scene):
     if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
     _check_seepage(s)
+    for key, reason in check_open_boundaries(s):
+        raise _Inconsistent(key, reason)
     _check_resources(s)
     from .geometry import overlapping_blocks  # geometry imports this module
 
@@ -682,7 +696,7 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
     merged = deep_merge(_numerics_defaults(raw, defaults), raw)
     _default_fields_for_the_phases(raw, merged)
-    for table in ("material_defaults", "artificial_viscosity_defaults"):
+    for table in ("material_defaults", "artificial_viscosity_defaults", "inlet_defaults"):
         # checked before they are filled in, so an error names the key the user wrote
         model = MaterialDefaults if table == "material_defaults" else Scene.model_fields[table].annotation
         try:
@@ -691,7 +705,7 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
         except ValidationError as exc:
             raise _refusal(exc, path, (table,)) from None
     try:
-        return Scene.model_validate(_fill_material_defaults(merged))
+        return Scene.model_validate(fill_inlet_defaults(_fill_material_defaults(merged)))
     except ValidationError as exc:
         raise _refusal(exc, path) from None
 
@@ -748,9 +762,20 @@ def load_scene(path, overrides=()) -> Scene:
         table = raw
         *parents, last = key.strip().split(".")
         for part in parents:
+            if isinstance(table, list):  # an array of tables by index: inlets.0.discharge=0.08
+                if not part.isdigit() or int(part) >= len(table) or not isinstance(table[int(part)], dict):
+                    raise SceneError(path, key, f"'{part}' is not an index of that array of tables")
+                table = table[int(part)]
+                continue
             table = table.setdefault(part, {})
-            if not isinstance(table, dict):
+            if not isinstance(table, (dict, list)):
                 raise SceneError(path, key, "is not a table in the scene")
+        if isinstance(table, list):
+            raise SceneError(
+                path,
+                key,
+                "names an array: only a key of one of its tables can be set (inlets.0.discharge=0.08)",
+            )
         table[last] = value
     return parse_scene(raw, path)
 

@@ -50,6 +50,7 @@ class Simulation:
             gravity=np.asarray(scene.scene.gravity, float),
             images=self.plan.term(WallImages),
         )
+        self.ctx.owns = self.comm.owns
         self._phase_of_material = self.plan.materials.phase
         self.t = 0.0
         self.step_count = 0
@@ -61,10 +62,14 @@ class Simulation:
         self.wall_reflections = 0  # specular reflections at walls (diagnostic, see lf_drift)
         self.deepest_penetration = 0.0
         self.settling = None
+        self._count_changes = any(t.changes_particles for t in self.plan.terms)
         if resume is not None:
             self.comm.setup(scene)
             self._resume(resume)
             return
+        if particles is None:
+            for term in self.plan.terms:
+                term.start(self.ctx)  # initial particles of terms (inlet buffers), on the replicated set
         self._start_half_steps()
         self.comm.setup(scene)  # MPI: domain box and [parallel] settings (no-op serial)
         self.rebuild()
@@ -231,7 +236,15 @@ class Simulation:
         if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance:
             self.rebuild()
         self._run(Stage.AFTER_DRIFT)
+        self._rebuild_if_requested()
         return dt
+
+    def _rebuild_if_requested(self):
+        """Terms that add or remove particles (inlets, outlets) ask for a rebuild: new rows get
+        their owner, ghosts, images and neighbours before the next step (collective)."""
+        requested, self.ctx.rebuild_requested = self.ctx.rebuild_requested, False
+        if self._count_changes and self.comm.any(requested):
+            self.rebuild()
 
     def advance_to(self, t_target, on_step=None):
         """Step until t == t_target exactly. The last two steps share the remaining time

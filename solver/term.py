@@ -67,6 +67,7 @@ class Term:
     stage: Stage = Stage.STATE
     targets: Phase | None = None
     neighbours: Phase | None = None
+    changes_particles: bool = False  # adds or removes particles (then it calls ctx.request_rebuild())
 
     def __init__(self):
         self.equations: tuple[Equation, ...] = ()
@@ -99,6 +100,10 @@ class Term:
     def dt_now(self, ctx: TermContext) -> float:
         """A state-dependent dt limit (dt_limit.constant_dt is None), after the rates stages."""
         return np.inf
+
+    def start(self, ctx: TermContext) -> None:
+        """Called once at set-up, before the first neighbour build, on the particle set that every
+        MPI rank still holds whole: a term may append its initial particles here (all of them)."""
 
     def on_rebuild(self, ctx: TermContext) -> None:
         """Called after every neighbour rebuild (after the halo is built)."""
@@ -148,6 +153,20 @@ class TermContext:
     rows: dict = field(default_factory=dict)  # Phase -> owned rows of that phase (int64)
     images: object = None  # the wall-image term, if the scene has walls
     shared: dict = field(default_factory=dict)  # per-step values one term leaves for another
+    owns: object = None  # owns(x) -> bool mask: does this process own new particles at x? (MPI ownership)
+    rebuild_requested: bool = False  # set by request_rebuild(); the step loop rebuilds and clears it
+
+    def request_rebuild(self):
+        """A term added or removed particles: the step loop migrates them and rebuilds halo, images
+        and neighbour lists after the current stage (docs/adding_a_term.md, "Adding or removing
+        particles")."""
+        self.rebuild_requested = True
+
+    def owned_here(self, x):
+        """Mask of the rows of x whose owner is this process (all of them in a serial run)."""
+        if self.owns is None:
+            return np.ones(len(x), dtype=bool)
+        return self.owns(x)
 
     def neighbours(self, term: Term):
         return self.lists[term.pair]

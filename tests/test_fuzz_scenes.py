@@ -31,7 +31,13 @@ N_MUTATIONS = 200  # per shipped scene (issue 13: at least 200)
 SEED = int(os.environ.get("SCOURSPH_FUZZ_SEED", "13"))
 TIMEOUT = 600  # s per run: set-up, compile (cached after the first), a few steps, the picture (loaded host)
 # a coarse spacing per scene (a/10, H/10, H/20) and a tiny end time: a run that validates is short
-COARSE = {"dam_break_2d": 0.005715, "hydrostatic_tank_2d": 0.01, "column_collapse_2d": 0.005}
+COARSE = {
+    "dam_break_2d": 0.005715,
+    "hydrostatic_tank_2d": 0.01,
+    "column_collapse_2d": 0.005,
+    "scour_dry": 0.01,  # 2 dx of the seed: a 10 mm layer of particles still fills the 0.095 m soil
+    "scour_saturated": 0.01,
+}
 END = 0.002
 SCENES = shipped_scenes()
 

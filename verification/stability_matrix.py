@@ -23,7 +23,11 @@ Cells
   dam_break_r{R}         scenes/dam_break_2d.toml at a/R (R = 20, 40, 80, 160), to t = 0.6 s: the
                          surge hits the far wall at t ~ 0.30 s (T = t sqrt(2g/a) ~ 5.5) and runs up it.
   block_drop_dx{D}       a 0.1 x 0.05 m block of the bars dropped at 2 m/s onto the no-slip floor, to 0.6 s.
-  saturated_bed, overflow_jet   placeholders: the scouring study's cases do not exist yet (issues 10, 11).
+  saturated_bed_dx{D}    scenes/scour_saturated.toml without its inlet (soil and pore water, geostatic and
+                         hydrostatic, under the free surface of its pore water) at rest, to 0.25 s.
+  overflow_jet_dx{D}     scenes/scour_dry.toml (q = 0.11, the study's highest) to 0.25 s: the nappe lands
+                         at t = 0 (prefill) and scours the dry layer. Also checked: the body leak counter
+                         is 0 and the volume balance holds within one particle volume.
 
 Checks per cell (CellResult.ok)
   no blow-up      the solver's own checks (NaN, particle outside the domain, wall crossing deeper
@@ -34,7 +38,8 @@ Checks per cell (CellResult.ok)
   energy          KE(t) <= F (KE(0) + PE(0) - PE(t) + E_el(0) + W_in), every ENERGY_EVERY steps.
                   The bracket is exact for the continuum: the total energy KE + PE + E_el never
                   grows (AV, plasticity and tension cracking only dissipate; psi = 0), E_el >= 0,
-                  and no inflow exists yet (W_in = 0). E_el(0) is the start state's elastic energy
+                  and W_in is the energy an inlet brings (below; 0 without one; outlets only remove
+                  energy, which PE(t) >= 0 leaves out). E_el(0) is the start state's elastic energy
                   (geostatic soil, hydrostatic water), which is free to become kinetic. F is the
                   time integration's slack: leap-frog conserves a modified energy; for the fastest
                   mode, omega dt, the true energy differs from it by the factor 1 / (1 - (omega dt)^2
@@ -43,6 +48,11 @@ Checks per cell (CellResult.ok)
                   F = 1.12. A blow-up exceeds the bound by orders of magnitude (issue 14: a grain at
                   3.7 km/s carries 3e5 J/m against a column's 50 J/m).
 KE is measured with velocities at whole steps (Simulation.current_state), PE = -sum m g.x.
+W_in (overflow_jet): each buffer layer an inlet appends brings its kinetic and potential energy,
+m sum_j (u^2/2 - g.x_j) at the section, and the buffer pushes the water ahead with its pressure:
+the flow work p u W dt per step, with p the mean positive pressure of the free water within one
+layer spacing downstream of the section (measured every step; an estimate of the work the
+kinematic buffer does, not a bound).
 """
 
 from __future__ import annotations
@@ -62,6 +72,10 @@ ROOT = Path(__file__).resolve().parent.parent
 OUT = Path(__file__).with_name("results") / "stability_matrix"
 COLLAPSE = ROOT / "scenes" / "column_collapse_2d.toml"
 DAM_BREAK = ROOT / "scenes" / "dam_break_2d.toml"
+SCOUR_DRY = ROOT / "scenes" / "scour_dry.toml"
+SCOUR_SATURATED = ROOT / "scenes" / "scour_saturated.toml"
+SCOUR_END = 0.25  # s: the overflow jet lands at t = 0; 0.25 s is ~10 passages of the nappe over the layer
+SCOUR_SPACINGS = (0.005, 0.0025)
 
 ASPECTS = (0.5, 1, 2, 3, 4)
 SOIL_SPACINGS = (0.005, 0.004, 0.003, 0.0025)
@@ -116,6 +130,8 @@ class CellResult:
     deepest_penetration: float = 0.0
     energy_ratio: float = 0.0  # max over checks of KE / (F * available energy)
     energy_factor: float = 1.0
+    body_leaks: int = 0
+    balance_ok: bool = True  # volume balance within one particle volume (scenes with inlets or outlets)
     wall_s: float = 0.0
     cpu_s: float = 0.0
     load: float = 0.0
@@ -135,7 +151,9 @@ class CellResult:
 
     @property
     def ok(self):
-        return self.completed and self.walls_ok and self.energy_ok
+        return (
+            self.completed and self.walls_ok and self.energy_ok and self.body_leaks == 0 and self.balance_ok
+        )
 
     def failure(self):
         """One line: what failed, for a report or an xfail reason."""
@@ -146,6 +164,10 @@ class CellResult:
             out.append(f"deepest wall penetration {self.deepest_penetration:.3g} m >= dx/2")
         if not self.energy_ok:
             out.append(f"kinetic energy {self.energy_ratio:.3g} x its bound")
+        if self.body_leaks:
+            out.append(f"{self.body_leaks} particle-steps inside a body")
+        if not self.balance_ok:
+            out.append("volume balance off by more than one particle volume")
         return "; ".join(out)
 
 
@@ -194,6 +216,18 @@ def block_drop_scene(dx, end_time=DROP_END):
     return _parse(raw, COLLAPSE)
 
 
+def scour_scene(saturated, dx, end_time=SCOUR_END):
+    """The scour scenes at spacing dx; the saturated bed without its inlet (a bed at rest)."""
+    path = SCOUR_SATURATED if saturated else SCOUR_DRY
+    raw = tomllib.loads(path.read_text())
+    raw["scene"].update(spacing=float(dx), end_time=float(end_time))
+    raw["output"] = {"interval": float(end_time), "vtk": False, "render": False}
+    if saturated:
+        raw["scene"]["name"] = "saturated_bed"
+        del raw["inlets"]
+    return _parse(raw, path)
+
+
 def _drop(sim):
     ps = sim.particles
     ps["v"][: ps.n_owned] = (0.0, -DROP_SPEED)
@@ -236,18 +270,13 @@ def cells():
         out.append(
             Cell(f"block_drop_dx{_mm(dx)}", "block_drop", lambda d=dx: (block_drop_scene(d), _drop), DROP_END)
         )
-    out.append(
-        Cell(
-            "saturated_bed",
-            "saturated_bed",
-            placeholder="the saturated bed needs seepage coupling (issue 10)",
-        )
-    )
-    out.append(
-        Cell(
-            "overflow_jet", "overflow_jet", placeholder="the overflow jet needs inflow and outflow (issue 11)"
-        )
-    )
+    for dx in SCOUR_SPACINGS:
+        for saturated, fam in ((True, "saturated_bed"), (False, "overflow_jet")):
+            out.append(
+                Cell(
+                    f"{fam}_dx{_mm(dx)}", fam, lambda d=dx, s=saturated: (scour_scene(s, d), None), SCOUR_END
+                )
+            )
     for c in out:
         c.ci = c.name in CI_CELLS
     return out
@@ -306,13 +335,54 @@ def estimated_cost(cell):
     plan = build_plan(scene)
     dt = min(c.constant_dt for c in plan.constraints if c.constant_dt is not None)
     area = sum((b.max[0] - b.min[0]) * (b.max[1] - b.min[1]) for b in scene.blocks)
+    area *= 2 if any(b.saturated for b in scene.blocks) else 1  # pore water: a second lattice
+    area += sum(0.1 * 0.25 for _ in scene.inlets)  # the water an overflow keeps on the layer (about)
     return area / scene.scene.spacing**2 * cell.end_time / dt
 
 
 # -- running -----------------------------------------------------------------------------------
+class InflowWork:
+    """W_in(t) of the inlets of a run (module docstring): layer energies plus the buffer's flow work."""
+
+    def __init__(self, sim):
+        from solver.physics.inlet import Inlets
+
+        self.inlets = sim.plan.term(Inlets)
+        self.released0 = [z.released for z in self.inlets.zones] if self.inlets else []
+        self.flow_work = 0.0
+        self.g = np.asarray(sim.gravity, float)
+
+    def step(self, sim, dt):
+        if self.inlets is None:
+            return
+        ps = sim.particles
+        n = ps.n_owned
+        free = ps["inlet_buffer"][:n] < 0
+        for z in self.inlets.zones:
+            r = ps["x"][:n] - z.origin
+            xi = (r @ z.n) / z.cos
+            s = r @ z.a
+            ahead = free & (xi > 0) & (xi < z.ds) & (s > 0) & (s < z.width)
+            if ahead.any():
+                p = float(np.mean(np.maximum(ps["p"][:n][ahead], 0.0)))
+                self.flow_work += p * z.speed * z.cos * z.width * dt
+
+    def total(self):
+        if self.inlets is None:
+            return 0.0
+        out = self.flow_work
+        for z, r0 in zip(self.inlets.zones, self.released0):
+            x = z.origin + z.lateral()[:, None] * z.a
+            per_layer = z.mass * float(np.sum(0.5 * z.speed**2 - x @ self.g))
+            out += (z.released - r0) * per_layer
+        return out
+
+
 def run_cell(cell, inflow_work=0.0):
     """Run one cell; never raises on a blow-up (the result says what happened)."""
     from solver.errors import BlowUpError
+    from solver.output.balance import VolumeLedger
+    from solver.physics.bodies import BodyGuard
     from solver.simulation import Simulation
 
     res = CellResult(cell.name, cell.family, end_time=cell.end_time)
@@ -329,13 +399,18 @@ def run_cell(cell, inflow_work=0.0):
     sim.current_state()
     ke0, pe0, el0 = energies(sim)
     ratio = [0.0]
+    inflow = InflowWork(sim)
+    ledger = VolumeLedger(sim, sim.comm)
+    last_t = [sim.t]
 
     def check(s, force=False):
+        inflow.step(s, s.t - last_t[0])
+        last_t[0] = s.t
         if s.step_count % ENERGY_EVERY and not force:
             return
         s.current_state()
         ke, pe, _ = energies(s)
-        available = ke0 + pe0 - pe + el0 + inflow_work
+        available = ke0 + pe0 - pe + el0 + inflow_work + inflow.total()
         ratio[0] = max(ratio[0], ke / (f * available) if available > 0 else (math.inf if ke > 0 else 0.0))
 
     t0, c0 = time.perf_counter(), time.process_time()
@@ -352,6 +427,15 @@ def run_cell(cell, inflow_work=0.0):
     res.wall_reflections = int(sim.wall_reflections)
     res.deepest_penetration = float(sim.deepest_penetration)
     res.energy_ratio = ratio[0]
+    report = ledger.report(sim, sim.comm)
+    res.body_leaks = int(report.get("body_leaks", 0))
+    balance = report.get("volume_balance", {}).get("materials", {})
+    res.balance_ok = all(m["within_one_particle"] for m in balance.values())
+    if guard := sim.plan.term(BodyGuard):
+        res.notes.append(f"body leaks {guard.leaks}")
+    if balance:
+        worst = max(abs(m["residual"]) for m in balance.values()) / res.spacing**2
+        res.notes.append(f"balance residual {worst:.2g} particle volumes")
     return res
 
 
@@ -366,6 +450,8 @@ FIELDS = (
     "wall_reflections",
     "deepest_penetration_dx",
     "energy_ratio",
+    "body_leaks",
+    "balance_ok",
     "wall_s",
     "cpu_s",
     "load",
@@ -386,6 +472,8 @@ def _row(r):
         "wall_reflections": r.wall_reflections,
         "deepest_penetration_dx": f"{r.deepest_penetration / r.spacing:.3g}" if r.spacing else "",
         "energy_ratio": f"{r.energy_ratio:.3g}",
+        "body_leaks": r.body_leaks,
+        "balance_ok": r.balance_ok,
         "wall_s": f"{r.wall_s:.1f}",
         "cpu_s": f"{r.cpu_s:.1f}",
         "load": f"{r.load:.1f}",

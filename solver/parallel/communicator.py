@@ -38,6 +38,10 @@ class SerialCommunicator:
         """MPI: collective check of the load imbalance (True forces a rebuild with new cuts)."""
         return False
 
+    def owns(self, x):
+        """Which rows of x this process owns (a new particle is appended by its owner only)."""
+        return np.ones(len(x), dtype=bool)
+
     # Halo: a serial run has no ghosts.
     def migrate(self, particles):
         pass

@@ -303,6 +303,11 @@ class MpiCommunicator:
             self._rebalance = True
         return self._rebalance
 
+    def owns(self, x):
+        """Which rows of x fall in this rank's box of the current decomposition (new particles)."""
+        x = np.asarray(x, float).reshape(len(x), -1)
+        return self.decomposition.owner(x, self.rank) == self.rank
+
     def migrate(self, particles):
         """Send owned particles outside this rank's box to their owners (all fields, ids kept).
         On the first call every rank holds the whole set (create_particles is deterministic):

@@ -6,6 +6,7 @@ within a stage; a term that needs another's output comes after it.
 """
 
 from .artificial_stress import ArtificialStress, ArtificialStressForce
+from .bodies import BodyGuard
 from .density_diffusion import DensityDiffusionRate, HydrostaticReference
 from .equilibrium_soil_images import EquilibriumSoilImages
 from .fixed_particles import FixedParticles
@@ -13,7 +14,9 @@ from .fluid_rates import FluidRates
 from .frictional_walls import FrictionalWalls
 from .gravity import Gravity
 from .hydrostatic_image_pressure import HydrostaticImagePressure
+from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
+from .outlet import Outlets
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
@@ -45,4 +48,7 @@ TERMS = (
     SoilReturnMapping,
     MidpointStart,
     MidpointContinuity,
+    BodyGuard,  # after the drift: leaks counted and reflected before particles are added or removed
+    Inlets,
+    Outlets,
 )

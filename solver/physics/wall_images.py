@@ -26,6 +26,7 @@ from ..neighbors import verlet_radius
 from ..particles import Mirror
 from ..tensors import SYM_AXES
 from ..term import Equation, Stage, Term
+from .bodies import BodyGeometry, BodyImages
 
 
 def wall_planes(scene):
@@ -150,6 +151,8 @@ class ImageWalls:
         self.sign = np.zeros((0, dim))
         self.offset = np.zeros((0, dim))
         self.any = bool(self.has_lo.any() or self.has_hi.any())
+        # polygon bodies (solver/physics/bodies.py): their images follow the box walls' images
+        self.bodies = BodyImages(BodyGeometry(scene), reach) if scene.bodies else None
         kinds = [(getattr(scene.walls, f"{ax}_min"), getattr(scene.walls, f"{ax}_max")) for ax in "xyz"[:dim]]
         # frictional walls are no-slip while stuck (solver/physics/frictional_walls.py)
         self.no_slip_lo = np.array([k[0] in ("no_slip", "frictional") for k in kinds])
@@ -179,9 +182,12 @@ class ImageWalls:
                 self.sign[:n], self.offset[:n], self.lo, self.hi, self.no_slip_lo, self.no_slip_hi
             )
         particles.ensure_capacity(n_local + n)
-        particles.n_image = n
+        box = (self.has_lo, self.lo, self.has_hi, self.hi) if self.any else None
+        nb = self.bodies.rebuild(particles, n_local + n, box) if self.bodies is not None else 0
+        particles.n_image = n + nb
 
     def tables(self):
+        """The box walls' images (the body images after them have rotation tables of their own)."""
         return self.src[: self.n], self.sign[: self.n], self.offset[: self.n]
 
     def velocity_signs(self):
@@ -196,6 +202,8 @@ class ImageWalls:
 
     def refresh(self, particles, names, specs):
         """Copy each named field from the sources to the images by its Mirror rule."""
+        if self.bodies is not None:
+            self.bodies.refresh(particles, names, specs, particles.n_local + self.n)
         if self.n == 0:
             return
         src, sign, offset = self.tables()
@@ -250,7 +258,7 @@ class WallImages(Term):
 
     @classmethod
     def build(cls, scene, materials):
-        return cls(scene) if scene.walls.kinds() else None
+        return cls(scene) if scene.walls.kinds() or scene.bodies else None
 
     def __init__(self, scene):
         super().__init__()
@@ -265,7 +273,7 @@ class WallImages(Term):
                 "seed eq. (23); Takeda et al. (1994)",
             ),
         )
-        kinds = {k for k in scene.walls.kinds()}
+        kinds = {k for k in scene.walls.kinds()} | ({"polygon bodies (free slip)"} if scene.bodies else set())
         self._summary = ", ".join(sorted(kinds))
 
     def on_rebuild(self, ctx):
