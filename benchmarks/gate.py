@@ -1,0 +1,346 @@
+"""The benchmark regression gate (issue 12): `make bench-check`.
+
+    python benchmarks/gate.py check [--json SUMMARY] [--baseline FILE]     exit 1 on a regression
+    python benchmarks/gate.py baseline [--runs 10]                          write the baseline
+    python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
+
+`check` runs benchmarks/bench_gate.py under pytest-benchmark once and compares each benchmark's
+ratio (its time / the calibration kernel's, measured interleaved in the same run; see
+bench_gate.py and calibration.py) with the baseline. A benchmark regressed when its ratio is
+more than `threshold` (relative) above the baseline's mean ratio.
+
+The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
+suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their mean,
+standard deviation and largest deviation, and threshold = MULTIPLE x relative standard
+deviation, at least FLOOR (the floor is for a quantity with almost no spread, the memory per
+particle). `repeat` runs `check` RUNS times, optionally with the controlled slowdown of
+benchmarks/slowdown.py, and tabulates the verdicts: an unchanged build must pass every run,
+a 10 % slowdown must be caught (docs/benchmarks.md has the figures).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+BASELINE = HERE / "baselines" / "gate.json"
+MULTIPLE = 4.0
+FLOOR = 0.02
+# every gate benchmark, as named in bench_gate.py (test_<name>)
+GATE = (
+    "water_step",
+    "soil_step",
+    "two_phase_step",
+    "neighbour_rebuild",
+    "mpi_two_rank_step",
+    "cold_compile",
+    "bytes_per_particle",
+)
+
+
+def cpu_model():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def git_commit():
+    try:
+        return subprocess.run(
+            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=ROOT
+        ).stdout.strip()
+    except OSError:
+        return "unknown"
+
+
+def run_suite(slowdown=None, select=None):
+    """One pytest-benchmark run of bench_gate.py: {name: extra_info}, the skipped/failed names
+    with reasons, the pytest exit status and the wall time."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", COLUMNS="400")
+    env.pop("SCOURSPH_BENCH_SLOWDOWN", None)
+    if slowdown:
+        env["SCOURSPH_BENCH_SLOWDOWN"] = str(slowdown)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "bench.json"
+        cmd = [
+            sys.executable,
+            "-m",
+            "pytest",
+            str(HERE / "bench_gate.py"),
+            "--benchmark-only",
+            f"--benchmark-json={out}",
+            "-o",
+            "addopts=",
+            "-o",
+            "python_files=bench_*.py",
+            "-p",
+            "no:cacheprovider",
+            "-v",
+            "-rfE",
+        ]
+        if select:
+            cmd += ["-k", select]
+        start = time.perf_counter()
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT)
+        wall = time.perf_counter() - start
+        data = json.loads(out.read_text()) if out.exists() else {"benchmarks": []}
+    found = {b["name"].removeprefix("test_"): b["extra_info"] for b in data["benchmarks"]}
+    missing = {}
+    for name in GATE:
+        if name in found or (select and select not in name):
+            continue
+        line = next((ln for ln in proc.stdout.splitlines() if f"::test_{name} " in ln), "")
+        m = re.search(r"(SKIPPED|FAILED|ERROR)\s*(?:\((.*)\))?", line)
+        reason = f"{m.group(1).lower()}: {m.group(2) or 'see the pytest output'}" if m else "did not run"
+        missing[name] = reason
+    return {
+        "found": found,
+        "missing": missing,
+        "returncode": proc.returncode,
+        "wall_s": wall,
+        "output": proc.stdout[-4000:] + proc.stderr[-2000:],
+    }
+
+
+def compare(run, baseline):
+    """The gate's verdict per benchmark: the summary the nightly report reads."""
+    base = (baseline or {}).get("benchmarks", {})
+    rows = []
+    for name in GATE:
+        if name in run["missing"]:
+            reason = run["missing"][name]
+            skipped = reason.startswith("skipped")
+            rows.append(
+                {
+                    "name": name,
+                    "skipped": reason if skipped else None,
+                    "error": None if skipped else reason,
+                    "regressed": not skipped,
+                }
+            )
+            continue
+        if name not in run["found"]:
+            continue
+        info = run["found"][name]
+        b = base.get(name)
+        row = {
+            "name": name,
+            "what": info["what"],
+            "value": info["value"],
+            "unit": info["unit"],
+            "calibration_s": info.get("calibration_s"),
+            "ratio": info["ratio"],
+            "load_1min": info.get("load_1min"),
+            "slowdown": info.get("slowdown"),
+            "baseline_ratio": b["mean"] if b else None,
+            "threshold": b["threshold"] if b else None,
+        }
+        row["change"] = row["ratio"] / row["baseline_ratio"] - 1 if b else None
+        row["regressed"] = bool(b) and row["change"] > row["threshold"]
+        rows.append(row)
+    return rows
+
+
+def summary(run, baseline, baseline_path):
+    rows = compare(run, baseline)
+    return {
+        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "host": socket.gethostname(),
+        "cpu": cpu_model(),
+        "commit": git_commit(),
+        "load_1min": os.getloadavg()[0],
+        "wall_s": run["wall_s"],
+        "baseline_source": (
+            f"{baseline_path.relative_to(ROOT) if baseline_path.is_relative_to(ROOT) else baseline_path} "
+            f"(commit {str(baseline.get('commit', '?'))[:10]}, {baseline.get('date', '?')}, host "
+            f"{baseline.get('host', '?')}, {baseline.get('runs', '?')} runs)"
+            if baseline
+            else "none: no baseline file, nothing is gated"
+        ),
+        "same_cpu_as_baseline": bool(baseline) and baseline.get("cpu") == cpu_model(),
+        "benchmarks": rows,
+        "regressed": [r["name"] for r in rows if r["regressed"]],
+    }
+
+
+def print_summary(s):
+    print(
+        f"benchmark gate: {s['date']}, host {s['host']}, load {s['load_1min']:.2f}, {s['wall_s']:.0f} s; "
+        f"baseline {s['baseline_source']}"
+    )
+    if s["benchmarks"] and not s["same_cpu_as_baseline"] and "none:" not in s["baseline_source"]:
+        print("  warning: the baseline was measured on another CPU model; ratios may not compare")
+    for r in s["benchmarks"]:
+        if r.get("skipped"):
+            print(f"  {r['name']:20s} {r['skipped']}")
+        elif r.get("error"):
+            print(f"  {r['name']:20s} FAILED TO RUN: {r['error']}")
+        else:
+            ch = f"{r['change']:+.1%} (gate +{r['threshold']:.1%})" if r["baseline_ratio"] else "no baseline"
+            print(
+                f"  {r['name']:20s} {r['value']:.4g} {r['unit']}, ratio {r['ratio']:.4g}, {ch}"
+                f"{'  REGRESSED' if r['regressed'] else ''}"
+            )
+
+
+def load_baseline(path):
+    path = Path(path)
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def cmd_check(args):
+    run = run_suite(args.slowdown, args.k)
+    s = summary(run, load_baseline(args.baseline), Path(args.baseline))
+    print_summary(s)
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(s, indent=1))
+    if s["regressed"]:
+        print(f"benchmark gate: REGRESSION in {', '.join(s['regressed'])}")
+        if any(r.get("error") for r in s["benchmarks"]):
+            print(run["output"])
+        return 1
+    return 0
+
+
+def spread(values):
+    mean = statistics.fmean(values)
+    std = statistics.stdev(values) if len(values) > 1 else 0.0
+    return {
+        "mean": mean,
+        "std": std,
+        "std_rel": std / mean,
+        "max_dev_rel": max(abs(v / mean - 1) for v in values),
+        "min": min(values),
+        "max": max(values),
+    }
+
+
+def cmd_baseline(args):
+    runs = []
+    for k in range(args.runs):
+        run = run_suite()
+        print(
+            f"baseline run {k + 1}/{args.runs}: {run['wall_s']:.0f} s, load {os.getloadavg()[0]:.2f}; "
+            + ", ".join(f"{n} {i['ratio']:.4g}" for n, i in run["found"].items()),
+            flush=True,
+        )
+        runs.append({"load_1min": os.getloadavg()[0], "wall_s": run["wall_s"], "found": run["found"]})
+    benches = {}
+    for name in GATE:
+        ratios = [r["found"][name]["ratio"] for r in runs if name in r["found"]]
+        if len(ratios) < 2:
+            continue
+        sp = spread(ratios)
+        first = next(r["found"][name] for r in runs if name in r["found"])
+        benches[name] = {
+            "what": first["what"],
+            "unit": first["unit"],
+            "ratios": ratios,
+            "values": [r["found"][name]["value"] for r in runs if name in r["found"]],
+            "calibration_s": [r["found"][name].get("calibration_s") for r in runs if name in r["found"]],
+            **sp,
+            "threshold": max(MULTIPLE * sp["std_rel"], FLOOR),
+        }
+    out = {
+        "host": socket.gethostname(),
+        "cpu": cpu_model(),
+        "commit": git_commit(),
+        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "runs": args.runs,
+        "loads_1min": [r["load_1min"] for r in runs],
+        "run_wall_s": [r["wall_s"] for r in runs],
+        "rule": f"threshold = max({MULTIPLE:g} x relative std of the ratio over the runs, {FLOOR:g})",
+        "benchmarks": benches,
+    }
+    path = Path(args.baseline)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(out, indent=1) + "\n")
+    print(f"baseline written to {path}")
+    for name, b in benches.items():
+        print(
+            f"  {name:20s} ratio mean {b['mean']:.4g}, std {b['std_rel']:.2%}, max deviation "
+            f"{b['max_dev_rel']:.2%}, threshold +{b['threshold']:.1%}"
+        )
+    return 0
+
+
+def cmd_repeat(args):
+    baseline = load_baseline(args.baseline)
+    if baseline is None:
+        print(f"no baseline at {args.baseline}: run `python benchmarks/gate.py baseline` first")
+        return 2
+    results = []
+    for k in range(args.runs):
+        s = summary(run_suite(args.slowdown, args.k), baseline, Path(args.baseline))
+        results.append(s)
+        print(
+            f"run {k + 1}/{args.runs} (slowdown {args.slowdown or 0:g}, load {s['load_1min']:.2f}): "
+            + ", ".join(
+                f"{r['name']} {r['change']:+.1%}{'!' if r['regressed'] else ''}"
+                for r in s["benchmarks"]
+                if r.get("change") is not None
+            ),
+            flush=True,
+        )
+    flagged = sum(1 for s in results if s["regressed"])
+    print(f"{flagged} of {args.runs} runs flagged a regression (slowdown {args.slowdown or 0:g})")
+    per = {}
+    for s in results:
+        for r in s["benchmarks"]:
+            if r.get("change") is not None:
+                per.setdefault(r["name"], []).append((r["change"], r["regressed"]))
+    for name, v in per.items():
+        print(
+            f"  {name:20s} flagged {sum(f for _, f in v)}/{len(v)}, change min {min(c for c, _ in v):+.1%} "
+            f"max {max(c for c, _ in v):+.1%}"
+        )
+    if args.out:
+        Path(args.out).write_text(json.dumps({"slowdown": args.slowdown, "runs": results}, indent=1) + "\n")
+    return 0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    for name in ("check", "baseline", "repeat"):
+        p = sub.add_parser(name)
+        p.add_argument(
+            "--baseline", default=str(BASELINE), help=f"baseline file (default {BASELINE.relative_to(ROOT)})"
+        )
+        if name != "baseline":
+            p.add_argument(
+                "--slowdown", type=float, help="inject a controlled slowdown (fraction, e.g. 0.10)"
+            )
+            p.add_argument("-k", help="only the benchmarks whose name contains this")
+        if name == "check":
+            p.add_argument(
+                "--json", help="write the gate's summary here (read by `scoursph report --bench-json`)"
+            )
+        else:
+            p.add_argument("--runs", type=int, default=10)
+        if name == "repeat":
+            p.add_argument("--out", help="write every run's summary here (JSON)")
+    args = ap.parse_args(argv)
+    return {"check": cmd_check, "baseline": cmd_baseline, "repeat": cmd_repeat}[args.command](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
