@@ -4,9 +4,11 @@
 
 Every timed benchmark is interleaved with the calibration kernel (benchmarks/calibration.py):
 pytest-benchmark's `setup` runs one calibration call before each round, so both see the host
-in the same state. extra_info carries what the gate reads: value (the median time, or the
-size), unit, calibration_s (median calibration time) and ratio = value / calibration_s (for
-bytes per particle, which no host speed affects, ratio = value). Public calls only:
+in the same state. Both clocks are kept: wall time (pytest-benchmark's own timing) and CPU
+time (time.process_time around the same call). extra_info carries what the gate reads: value
+and value_cpu (the median times, or the size), unit, calibration_s and calibration_cpu_s (the
+calibration's medians), ratio = value / calibration_s and ratio_cpu = value_cpu /
+calibration_cpu_s (for bytes per particle, which no host speed affects, ratio = value). Public calls only:
 Simulation(scene).step(), Simulation.rebuild(). One Numba thread; the MPI step uses 2 ranks
 of one thread each. SCOURSPH_BENCH_SLOWDOWN (benchmarks/slowdown.py) injects a controlled
 slowdown for the gate's own test.
@@ -20,6 +22,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numba
@@ -27,22 +30,26 @@ import pytest
 from calibration import calibration
 from dam_break_setup import dam_break
 from slowdown import ENV as SLOWDOWN_ENV
-from slowdown import slowed
+from slowdown import spin_after
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
 N = 25_000
 
 
-def record(benchmark, what, value, unit, calib=None, **extra):
+def record(benchmark, what, value, unit, calib=None, value_cpu=None, calib_cpu=None, **extra):
     cal = statistics.median(calib) if calib else None
+    cal_cpu = statistics.median(calib_cpu) if calib_cpu else None
     benchmark.extra_info.update(
         gate=True,
         what=what,
         value=value,
+        value_cpu=value_cpu,
         unit=unit,
         calibration_s=cal,
+        calibration_cpu_s=cal_cpu,
         ratio=value / cal if cal else value,
+        ratio_cpu=value_cpu / cal_cpu if cal_cpu and value_cpu else (None if cal else value),
         slowdown=float(os.environ.get(SLOWDOWN_ENV, "0") or 0.0),
         load_1min=os.getloadavg()[0],
         **extra,
@@ -51,31 +58,35 @@ def record(benchmark, what, value, unit, calib=None, **extra):
 
 def interleaved(benchmark, target, rounds, before=None):
     """Time `target` for `rounds` rounds, one calibration call (and `before`, untimed) ahead of
-    each; returns the calibration times."""
-    cal, times = calibration(), []
+    each; returns (median target CPU time, calibration wall times, calibration CPU times). The
+    controlled slowdown, if set, spins inside the timed call."""
+    cal = calibration()
+    cal_wall, cal_cpu, cpu = [], [], []
 
     def setup():
-        times.append(cal.time_once())
+        w, c = cal.measure()
+        cal_wall.append(w)
+        cal_cpu.append(c)
         if before is not None:
             before()
 
-    benchmark.pedantic(slowed(target), setup=setup, rounds=rounds, iterations=1, warmup_rounds=3)
-    return times
+    def timed():
+        t0, c0 = time.perf_counter(), time.process_time()
+        target()
+        spin_after(t0, c0)
+        cpu.append(time.process_time() - c0)
+
+    benchmark.pedantic(timed, setup=setup, rounds=rounds, iterations=1, warmup_rounds=3)
+    return statistics.median(cpu), cal_wall, cal_cpu
 
 
 def test_water_step(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
-    cal = interleaved(benchmark, sim.step, rounds=80)
+    cpu, cal, cal_cpu = interleaved(benchmark, sim.step, rounds=80)
     n = sim.particles.n_owned
-    record(
-        benchmark,
-        f"water step, dam break, {n} particles, 1 thread",
-        benchmark.stats.stats.median,
-        "s",
-        cal,
-        particles=n,
-    )
+    what = f"water step, dam break, {n} particles, 1 thread"
+    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
 
 
 def test_soil_step(benchmark):
@@ -83,16 +94,10 @@ def test_soil_step(benchmark):
 
     numba.set_num_threads(1)
     sim = soil_collapse(N)
-    cal = interleaved(benchmark, sim.step, rounds=60)
+    cpu, cal, cal_cpu = interleaved(benchmark, sim.step, rounds=60)
     n = sim.particles.n_owned
-    record(
-        benchmark,
-        f"soil step, column collapse, {n} particles, 1 thread",
-        benchmark.stats.stats.median,
-        "s",
-        cal,
-        particles=n,
-    )
+    what = f"soil step, column collapse, {n} particles, 1 thread"
+    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
 
 
 def seepage_term_exists():
@@ -114,16 +119,10 @@ def test_neighbour_rebuild(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
     # a step between rebuilds moves the particles, so each rebuild re-sorts real motion
-    cal = interleaved(benchmark, sim.rebuild, rounds=40, before=sim.step)
+    cpu, cal, cal_cpu = interleaved(benchmark, sim.rebuild, rounds=40, before=sim.step)
     n = sim.particles.n_owned
-    record(
-        benchmark,
-        f"neighbour-list rebuild, dam break, {n} particles, 1 thread",
-        benchmark.stats.stats.median,
-        "s",
-        cal,
-        particles=n,
-    )
+    what = f"neighbour-list rebuild, dam break, {n} particles, 1 thread"
+    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
 
 
 MPI_PARTICLES, MPI_ROUNDS, MPI_STEPS = 50_000, 20, 5
@@ -159,17 +158,19 @@ def test_mpi_two_rank_step(benchmark):
     res = benchmark.pedantic(_mpi_run, rounds=1, iterations=1)
     record(
         benchmark,
-        f"MPI step, dam break, {res['particles']} particles, 2 ranks x 1 thread",
+        f"MPI step, dam break, {res['particles']} particles, 2 ranks x 1 thread (CPU time: rank 0's)",
         statistics.median(res["step_s"]),
         "s",
         res["calibration_s"],
+        statistics.median(res["step_cpu_s"]),
+        res["calibration_cpu_s"],
         particles=res["particles"],
     )
 
 
 COLD = """
 import os, sys, time
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 sys.path[:0] = [{root!r}, {bench!r}]
 from slowdown import spin_after
 import solver.simulation
@@ -181,12 +182,14 @@ sim = dam_break({n})
 for _ in range(20):
     sim.step()
 grown = resident() - before
-print(spin_after(t0), grown, sim.particles.n_owned)
+wall = spin_after(t0, c0)
+print(wall, time.process_time() - c0, grown, sim.particles.n_owned)
 """
 
 
 def fresh_process(n, cache_dir):
-    """(seconds for import, set-up, compile or cache load, 20 steps; resident-set growth; particles)."""
+    """(wall s, CPU s) for import, set-up, compile or cache load and 20 steps of n particles in a
+    fresh process; its resident-set growth; the particle count."""
     env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "NUMBA_NUM_THREADS": "1"}
     out = subprocess.run(
         [sys.executable, "-c", COLD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"), n=n)],
@@ -195,27 +198,29 @@ def fresh_process(n, cache_dir):
         env=env,
         check=True,
     )
-    seconds, rss, particles = out.stdout.split()
-    return float(seconds), int(rss), int(particles)
+    wall, cpu, rss, particles = out.stdout.split()
+    return (float(wall), float(cpu)), int(rss), int(particles)
 
 
 def test_cold_compile(benchmark):
     """Compile time: a fresh process with an empty Numba cache minus the same with the cache
     filled (both import, set up 2,000 particles and step 20 times); calibration before and after."""
     cal = calibration()
-    times = [cal.time_once() for _ in range(5)]
+    times = [cal.measure() for _ in range(5)]
     with tempfile.TemporaryDirectory() as cache:
         cold, _, _ = benchmark.pedantic(fresh_process, args=(2_000, cache), rounds=1, iterations=1)
         warm, _, _ = fresh_process(2_000, cache)
-    times += [cal.time_once() for _ in range(5)]
+    times += [cal.measure() for _ in range(5)]
     record(
         benchmark,
         "cold compile (empty Numba cache minus warm start), 1 thread",
-        cold - warm,
+        cold[0] - warm[0],
         "s",
-        times,
-        cold_start_s=cold,
-        warm_start_s=warm,
+        [w for w, _ in times],
+        cold[1] - warm[1],
+        [c for _, c in times],
+        cold_start_s=cold[0],
+        warm_start_s=warm[0],
     )
 
 

@@ -132,9 +132,14 @@ class Calibration:
         return int(self.start[-1])
 
     def time_once(self):
-        t0 = time.perf_counter()
+        """Wall seconds of one pass."""
+        return self.measure()[0]
+
+    def measure(self):
+        """(wall s, CPU s) of one pass."""
+        t0, c0 = time.perf_counter(), time.process_time()
         pair_sum(self.start, self.index, self.x, self.v, self.rho, self.mass, self.h, self.drho, self.acc)
-        return time.perf_counter() - t0
+        return time.perf_counter() - t0, time.process_time() - c0
 
 
 _shared = None
