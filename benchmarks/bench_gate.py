@@ -4,12 +4,14 @@
 
 Every timed benchmark is interleaved with the calibration kernel (benchmarks/calibration.py):
 pytest-benchmark's `setup` runs one calibration call before each round, so both see the host
-in the same state. Both clocks are kept: wall time (pytest-benchmark's own timing) and CPU
-time (time.process_time around the same call). extra_info carries what the gate reads: value
-and value_cpu (the median times, or the size), unit, calibration_s and calibration_cpu_s (the
-calibration's medians), ratio = value / calibration_s and ratio_cpu = value_cpu /
-calibration_cpu_s (for bytes per particle, which no host speed affects, ratio = value). Public calls only:
-Simulation(scene).step(), Simulation.rebuild(). One Numba thread; the MPI step uses 2 ranks
+in the same state. Both clocks are kept, wall time (time.perf_counter, as pytest-benchmark)
+and CPU time (time.process_time), per round. extra_info carries what the gate reads: value
+(the median wall time, or the size), unit, and four ratios of the benchmark to the
+calibration: `ratio` (median wall / median wall), `ratio_cpu` (median CPU / median CPU),
+`ratio_min` and `ratio_cpu_min` (the same with the fastest round: noise on a shared host only
+ever slows a round down). The gate uses the one whose measured run-to-run spread is smallest
+(docs/benchmarks.md). Bytes per particle, which no host speed affects, is its own ratio.
+Public calls only: Simulation(scene).step(), Simulation.rebuild(). One Numba thread; the MPI step uses 2 ranks
 of one thread each. SCOURSPH_BENCH_SLOWDOWN (benchmarks/slowdown.py) injects a controlled
 slowdown for the gate's own test.
 """
@@ -37,19 +39,25 @@ BIN = Path(sys.executable).parent
 N = 25_000
 
 
-def record(benchmark, what, value, unit, calib=None, value_cpu=None, calib_cpu=None, **extra):
-    cal = statistics.median(calib) if calib else None
-    cal_cpu = statistics.median(calib_cpu) if calib_cpu else None
+def record(benchmark, what, unit, wall, cpu=None, cal_wall=None, cal_cpu=None, **extra):
+    """extra_info of a gate benchmark from its per-round wall and CPU times and the calibration's."""
+    med, low = statistics.median, min
+    info = dict(gate=True, what=what, unit=unit, value=med(wall), value_cpu=med(cpu) if cpu else None)
+    if cal_wall:
+        info.update(
+            calibration_s=med(cal_wall),
+            calibration_cpu_s=med(cal_cpu),
+            ratio=med(wall) / med(cal_wall),
+            ratio_min=low(wall) / low(cal_wall),
+            ratio_cpu=med(cpu) / med(cal_cpu),
+            ratio_cpu_min=low(cpu) / low(cal_cpu),
+        )
+    else:  # not a time
+        info.update(
+            ratio=info["value"], ratio_min=info["value"], ratio_cpu=info["value"], ratio_cpu_min=info["value"]
+        )
     benchmark.extra_info.update(
-        gate=True,
-        what=what,
-        value=value,
-        value_cpu=value_cpu,
-        unit=unit,
-        calibration_s=cal,
-        calibration_cpu_s=cal_cpu,
-        ratio=value / cal if cal else value,
-        ratio_cpu=value_cpu / cal_cpu if cal_cpu and value_cpu else (None if cal else value),
+        **info,
         slowdown=float(os.environ.get(SLOWDOWN_ENV, "0") or 0.0),
         load_1min=os.getloadavg()[0],
         **extra,
@@ -58,10 +66,10 @@ def record(benchmark, what, value, unit, calib=None, value_cpu=None, calib_cpu=N
 
 def interleaved(benchmark, target, rounds, before=None):
     """Time `target` for `rounds` rounds, one calibration call (and `before`, untimed) ahead of
-    each; returns (median target CPU time, calibration wall times, calibration CPU times). The
-    controlled slowdown, if set, spins inside the timed call."""
+    each; returns (wall, CPU, calibration wall, calibration CPU) per round. The controlled
+    slowdown, if set, spins inside the timed call."""
     cal = calibration()
-    cal_wall, cal_cpu, cpu = [], [], []
+    cal_wall, cal_cpu, wall, cpu = [], [], [], []
 
     def setup():
         w, c = cal.measure()
@@ -73,20 +81,19 @@ def interleaved(benchmark, target, rounds, before=None):
     def timed():
         t0, c0 = time.perf_counter(), time.process_time()
         target()
-        spin_after(t0, c0)
+        wall.append(spin_after(t0, c0))
         cpu.append(time.process_time() - c0)
 
     benchmark.pedantic(timed, setup=setup, rounds=rounds, iterations=1, warmup_rounds=3)
-    return statistics.median(cpu), cal_wall, cal_cpu
+    return wall[3:], cpu[3:], cal_wall[3:], cal_cpu[3:]  # without the warm-up rounds
 
 
 def test_water_step(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
-    cpu, cal, cal_cpu = interleaved(benchmark, sim.step, rounds=80)
+    times = interleaved(benchmark, sim.step, rounds=80)
     n = sim.particles.n_owned
-    what = f"water step, dam break, {n} particles, 1 thread"
-    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
+    record(benchmark, f"water step, dam break, {n} particles, 1 thread", "s", *times, particles=n)
 
 
 def test_soil_step(benchmark):
@@ -94,10 +101,9 @@ def test_soil_step(benchmark):
 
     numba.set_num_threads(1)
     sim = soil_collapse(N)
-    cpu, cal, cal_cpu = interleaved(benchmark, sim.step, rounds=60)
+    times = interleaved(benchmark, sim.step, rounds=60)
     n = sim.particles.n_owned
-    what = f"soil step, column collapse, {n} particles, 1 thread"
-    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
+    record(benchmark, f"soil step, column collapse, {n} particles, 1 thread", "s", *times, particles=n)
 
 
 def seepage_term_exists():
@@ -119,10 +125,9 @@ def test_neighbour_rebuild(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
     # a step between rebuilds moves the particles, so each rebuild re-sorts real motion
-    cpu, cal, cal_cpu = interleaved(benchmark, sim.rebuild, rounds=40, before=sim.step)
+    times = interleaved(benchmark, sim.rebuild, rounds=40, before=sim.step)
     n = sim.particles.n_owned
-    what = f"neighbour-list rebuild, dam break, {n} particles, 1 thread"
-    record(benchmark, what, benchmark.stats.stats.median, "s", cal, cpu, cal_cpu, particles=n)
+    record(benchmark, f"neighbour-list rebuild, dam break, {n} particles, 1 thread", "s", *times, particles=n)
 
 
 MPI_PARTICLES, MPI_ROUNDS, MPI_STEPS = 50_000, 20, 5
@@ -159,10 +164,10 @@ def test_mpi_two_rank_step(benchmark):
     record(
         benchmark,
         f"MPI step, dam break, {res['particles']} particles, 2 ranks x 1 thread (CPU time: rank 0's)",
-        statistics.median(res["step_s"]),
         "s",
+        res["step_s"],
+        res["step_cpu_s"],
         res["calibration_s"],
-        statistics.median(res["step_cpu_s"]),
         res["calibration_cpu_s"],
         particles=res["particles"],
     )
@@ -214,10 +219,10 @@ def test_cold_compile(benchmark):
     record(
         benchmark,
         "cold compile (empty Numba cache minus warm start), 1 thread",
-        cold[0] - warm[0],
         "s",
+        [cold[0] - warm[0]],
+        [cold[1] - warm[1]],
         [w for w, _ in times],
-        cold[1] - warm[1],
         [c for _, c in times],
         cold_start_s=cold[0],
         warm_start_s=warm[0],

@@ -358,7 +358,10 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
             )
         )
     return save_study(
-        rows, out_dir, "dam_break_study", note=timing_note("python -m verification.dam_break --study")
+        rows,
+        out_dir,
+        "dam_break_study",
+        note=timing_note("NUMBA_NUM_THREADS=1 python -m verification.dam_break --study"),
     )
 
 

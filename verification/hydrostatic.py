@@ -181,7 +181,10 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
             )
         )
     return save_study(
-        rows, out_dir, "hydrostatic_study", note=timing_note("python -m verification.hydrostatic --study")
+        rows,
+        out_dir,
+        "hydrostatic_study",
+        note=timing_note("NUMBA_NUM_THREADS=1 python -m verification.hydrostatic --study"),
     )
 
 

@@ -1,0 +1,74 @@
+"""The benchmark gate's logic (benchmarks/gate.py), without timing anything: every gate
+benchmark is known to the gate, a ratio past the threshold is a regression and one within is
+not, a skipped placeholder is not, a benchmark that failed to run is, and the controlled
+slowdown makes a call at least its fraction longer (a lower bound of a busy wait, which no
+load can break)."""
+
+from __future__ import annotations
+
+import re
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import gate  # noqa: E402
+import slowdown  # noqa: E402
+
+
+def test_gate_lists_every_benchmark_of_bench_gate():
+    names = re.findall(r"^def test_(\w+)\(", (ROOT / "benchmarks" / "bench_gate.py").read_text(), re.M)
+    assert tuple(names) == gate.GATE
+
+
+def _run(ratio, ratio_cpu=None):
+    info = {"what": "w", "value": 1.0, "value_cpu": 1.0, "unit": "s", "ratio": ratio, "ratio_cpu": ratio_cpu}
+    return {
+        "found": {"water_step": info},
+        "missing": {
+            "two_phase_step": "skipped: two-phase coupling not built yet",
+            "soil_step": "failed: see the pytest output",
+        },
+    }
+
+
+BASE = {
+    "benchmarks": {
+        "water_step": {"wall": {"mean": 1.0, "threshold": 0.05}, "cpu": {"mean": 2.0, "threshold": 0.05}}
+    }
+}
+
+
+def test_ratio_past_threshold_is_a_regression():
+    rows = {r["name"]: r for r in gate.compare(_run(1.06), BASE, "wall")}
+    assert rows["water_step"]["regressed"] and abs(rows["water_step"]["change"] - 0.06) < 1e-12
+    rows = {r["name"]: r for r in gate.compare(_run(1.04), BASE, "wall")}
+    assert not rows["water_step"]["regressed"]
+    assert not rows["two_phase_step"]["regressed"] and "not built yet" in rows["two_phase_step"]["skipped"]
+    assert rows["soil_step"]["regressed"] and rows["soil_step"]["error"]
+
+
+def test_cpu_clock_uses_cpu_ratio():
+    rows = {r["name"]: r for r in gate.compare(_run(1.0, 2.2), BASE, "cpu")}
+    assert rows["water_step"]["regressed"]  # 2.2 / 2.0 = +10 % > 5 %
+
+
+def test_no_baseline_gates_nothing():
+    rows = {r["name"]: r for r in gate.compare(_run(5.0), None, "wall")}
+    assert not rows["water_step"]["regressed"]
+
+
+def test_spread_and_threshold_rule():
+    sp = gate.spread([1.0, 1.02, 0.98, 1.0])
+    assert abs(sp["mean"] - 1.0) < 1e-12 and abs(sp["max_dev_rel"] - 0.02) < 1e-12
+    assert sp["std_rel"] > 0
+
+
+def test_controlled_slowdown_lengthens_a_call_by_at_least_its_fraction():
+    t0, c0 = time.perf_counter(), time.process_time()
+    while time.perf_counter() - t0 < 0.02:
+        pass
+    total = slowdown.spin_after(t0, c0, 0.10)
+    assert total >= 0.022
