@@ -236,6 +236,5 @@ def test_bytes_per_particle(benchmark):
         fresh_process(2_000, cache)  # fill the cache: the two measured processes only load it
         _, small, n_small = benchmark.pedantic(fresh_process, args=(25_000, cache), rounds=1, iterations=1)
         _, big, n_big = fresh_process(100_000, cache)
-    record(
-        benchmark, "resident memory per particle (100k minus 25k)", (big - small) / (n_big - n_small), "bytes"
-    )
+    per_particle = (big - small) / (n_big - n_small)
+    record(benchmark, "resident memory per particle (100k minus 25k)", "bytes", [per_particle])

@@ -255,7 +255,9 @@ def cmd_baseline(args):
         run = run_suite()
         print(
             f"baseline run {k + 1}/{args.runs}: {run['wall_s']:.0f} s, load {os.getloadavg()[0]:.2f}; "
-            + ", ".join(f"{n} {i['ratio']:.4g}" for n, i in run["found"].items()),
+            + ", ".join(
+                f"{n} {i['ratio']:.4g} (CPU {ratio_of(i, 'cpu'):.4g})" for n, i in run["found"].items()
+            ),
             flush=True,
         )
         runs.append({"load_1min": os.getloadavg()[0], "wall_s": run["wall_s"], "found": run["found"]})
