@@ -4,13 +4,10 @@
 
 Every timed benchmark is interleaved with the calibration kernel (benchmarks/calibration.py):
 pytest-benchmark's `setup` runs one calibration call before each round, so both see the host
-in the same state. Both clocks are kept, wall time (time.perf_counter, as pytest-benchmark)
-and CPU time (time.process_time), per round. extra_info carries what the gate reads: value
-(the median wall time, or the size), unit, and four ratios of the benchmark to the
-calibration: `ratio` (median wall / median wall), `ratio_cpu` (median CPU / median CPU),
-`ratio_min` and `ratio_cpu_min` (the same with the fastest round: noise on a shared host only
-ever slows a round down). The gate uses the one whose measured run-to-run spread is smallest
-(docs/benchmarks.md). Bytes per particle, which no host speed affects, is its own ratio.
+in the same state. Both clocks are kept per round, wall time (time.perf_counter, as
+pytest-benchmark) and CPU time (time.process_time). extra_info carries what the gate reads:
+what, unit, value (median wall time, or the size) and `rounds`, the raw per-round times of the
+benchmark and of the calibration by both clocks; benchmarks/gate.py turns them into ratios.
 Public calls only: Simulation(scene).step(), Simulation.rebuild(). One Numba thread; the MPI step uses 2 ranks
 of one thread each. SCOURSPH_BENCH_SLOWDOWN (benchmarks/slowdown.py) injects a controlled
 slowdown for the gate's own test.
@@ -40,24 +37,19 @@ N = 25_000
 
 
 def record(benchmark, what, unit, wall, cpu=None, cal_wall=None, cal_cpu=None, **extra):
-    """extra_info of a gate benchmark from its per-round wall and CPU times and the calibration's."""
-    med, low = statistics.median, min
-    info = dict(gate=True, what=what, unit=unit, value=med(wall), value_cpu=med(cpu) if cpu else None)
-    if cal_wall:
-        info.update(
-            calibration_s=med(cal_wall),
-            calibration_cpu_s=med(cal_cpu),
-            ratio=med(wall) / med(cal_wall),
-            ratio_min=low(wall) / low(cal_wall),
-            ratio_cpu=med(cpu) / med(cal_cpu),
-            ratio_cpu_min=low(cpu) / low(cal_cpu),
-        )
-    else:  # not a time
-        info.update(
-            ratio=info["value"], ratio_min=info["value"], ratio_cpu=info["value"], ratio_cpu_min=info["value"]
-        )
+    """extra_info of a gate benchmark: its per-round wall and CPU times and the calibration's."""
     benchmark.extra_info.update(
-        **info,
+        gate=True,
+        what=what,
+        unit=unit,
+        value=statistics.median(wall),
+        value_cpu=statistics.median(cpu) if cpu else None,
+        rounds={
+            "wall": list(wall),
+            "cpu": list(cpu or []),
+            "cal_wall": list(cal_wall or []),
+            "cal_cpu": list(cal_cpu or []),
+        },
         slowdown=float(os.environ.get(SLOWDOWN_ENV, "0") or 0.0),
         load_1min=os.getloadavg()[0],
         **extra,
@@ -91,7 +83,7 @@ def interleaved(benchmark, target, rounds, before=None):
 def test_water_step(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
-    times = interleaved(benchmark, sim.step, rounds=80)
+    times = interleaved(benchmark, sim.step, rounds=100)
     n = sim.particles.n_owned
     record(benchmark, f"water step, dam break, {n} particles, 1 thread", "s", *times, particles=n)
 
@@ -101,7 +93,7 @@ def test_soil_step(benchmark):
 
     numba.set_num_threads(1)
     sim = soil_collapse(N)
-    times = interleaved(benchmark, sim.step, rounds=60)
+    times = interleaved(benchmark, sim.step, rounds=100)
     n = sim.particles.n_owned
     record(benchmark, f"soil step, column collapse, {n} particles, 1 thread", "s", *times, particles=n)
 
@@ -125,7 +117,7 @@ def test_neighbour_rebuild(benchmark):
     numba.set_num_threads(1)
     sim = dam_break(N)
     # a step between rebuilds moves the particles, so each rebuild re-sorts real motion
-    times = interleaved(benchmark, sim.rebuild, rounds=40, before=sim.step)
+    times = interleaved(benchmark, sim.rebuild, rounds=60, before=sim.step)
     n = sim.particles.n_owned
     record(benchmark, f"neighbour-list rebuild, dam break, {n} particles, 1 thread", "s", *times, particles=n)
 

@@ -37,13 +37,17 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 BASELINE = HERE / "baselines" / "gate.json"
+RAW = ROOT / "runs" / "bench" / "baseline_runs.jsonl"
 MULTIPLE = 4.0
 FLOOR = 0.02
-# the ratio estimator the gate uses; every run measures all four and the baseline keeps the
-# spread of each: median or fastest round, by wall time (perf_counter) or CPU time
-# (process_time). The choice and its reason: docs/benchmarks.md
-CLOCK = "wall"
-RATIO_KEY = {"wall": "ratio", "cpu": "ratio_cpu", "wall_min": "ratio_min", "cpu_min": "ratio_cpu_min"}
+# How a run's per-round times become one ratio (benchmark / calibration), by wall time
+# (perf_counter) or CPU time (process_time): the medians' ratio, the fastest rounds' ratio
+# (noise on a shared host only slows a round down), or the median of the per-round ratios
+# (each round's benchmark against the calibration call just before it). `baseline` measures the
+# run-to-run spread of each and keeps the estimator with the smallest spread over the timed
+# benchmarks; the gate then uses that one (docs/benchmarks.md).
+ESTIMATORS = ("wall", "cpu", "wall_min", "cpu_min", "wall_paired", "cpu_paired")
+DEFAULT_ESTIMATOR = "cpu_paired"
 # every gate benchmark, as named in bench_gate.py (test_<name>)
 GATE = (
     "water_step",
@@ -124,13 +128,28 @@ def run_suite(slowdown=None, select=None):
     }
 
 
-def ratio_of(info, clock):
-    """A benchmark's ratio by the given clock (the size itself where no clock applies)."""
-    r = info.get(RATIO_KEY[clock])
-    return info["ratio"] if r is None else r
+def ratios(info):
+    """{estimator: ratio} of one benchmark's run (the size itself where no time is involved)."""
+    r = info.get("rounds", {})
+    if not r.get("cal_wall"):
+        return dict.fromkeys(ESTIMATORS, info["value"])
+    med = statistics.median
+    out = {}
+    for clock, (x, c) in {"wall": ("wall", "cal_wall"), "cpu": ("cpu", "cal_cpu")}.items():
+        xs, cs = r[x], r[c]
+        out[clock] = med(xs) / med(cs)
+        out[f"{clock}_min"] = min(xs) / min(cs)
+        out[f"{clock}_paired"] = (
+            med(a / b for a, b in zip(xs, cs)) if len(xs) == len(cs) else med(xs) / med(cs)
+        )
+    return out
 
 
-def compare(run, baseline, clock=CLOCK):
+def ratio_of(info, estimator):
+    return ratios(info)[estimator]
+
+
+def compare(run, baseline, clock=DEFAULT_ESTIMATOR):
     """The gate's verdict per benchmark: the summary the nightly report reads."""
     base = (baseline or {}).get("benchmarks", {})
     rows = []
@@ -160,7 +179,7 @@ def compare(run, baseline, clock=CLOCK):
             "unit": info["unit"],
             "calibration_s": info.get("calibration_s"),
             "ratio": ratio_of(info, clock),
-            "ratios": {c: info.get(k) for c, k in RATIO_KEY.items()},
+            "ratios": ratios(info),
             "load_1min": info.get("load_1min"),
             "slowdown": info.get("slowdown"),
             "baseline_ratio": b["mean"] if b else None,
@@ -173,7 +192,7 @@ def compare(run, baseline, clock=CLOCK):
 
 
 def summary(run, baseline, baseline_path, clock=None):
-    clock = clock or (baseline or {}).get("clock", CLOCK)
+    clock = clock or (baseline or {}).get("estimator", DEFAULT_ESTIMATOR)
     rows = compare(run, baseline, clock)
     return {
         "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
@@ -190,7 +209,7 @@ def summary(run, baseline, baseline_path, clock=None):
             else "none: no baseline file, nothing is gated"
         ),
         "same_cpu_as_baseline": bool(baseline) and baseline.get("cpu") == cpu_model(),
-        "clock": clock,
+        "estimator": clock,
         "benchmarks": rows,
         "regressed": [r["name"] for r in rows if r["regressed"]],
     }
@@ -223,7 +242,7 @@ def load_baseline(path):
 
 def cmd_check(args):
     run = run_suite(args.slowdown, args.k)
-    s = summary(run, load_baseline(args.baseline), Path(args.baseline), args.clock)
+    s = summary(run, load_baseline(args.baseline), Path(args.baseline), args.estimator)
     print_summary(s)
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
@@ -250,33 +269,48 @@ def spread(values):
 
 
 def cmd_baseline(args):
+    if args.from_raw:  # recompute from the raw rounds of earlier baseline runs
+        runs = [json.loads(line) for line in Path(args.from_raw).read_text().splitlines() if line.strip()]
+        args.runs = len(runs)
+        return write_baseline(args, runs)
     runs = []
     for k in range(args.runs):
         run = run_suite()
         print(
             f"baseline run {k + 1}/{args.runs}: {run['wall_s']:.0f} s, load {os.getloadavg()[0]:.2f}; "
             + ", ".join(
-                f"{n} {i['ratio']:.4g} (CPU {ratio_of(i, 'cpu'):.4g})" for n, i in run["found"].items()
+                f"{n} {ratio_of(i, 'wall'):.4g} (CPU paired {ratio_of(i, 'cpu_paired'):.4g})"
+                for n, i in run["found"].items()
             ),
             flush=True,
         )
         runs.append({"load_1min": os.getloadavg()[0], "wall_s": run["wall_s"], "found": run["found"]})
+        RAW.parent.mkdir(parents=True, exist_ok=True)
+        with open(RAW, "a") as fh:  # every run's raw rounds, kept outside the repository (runs/)
+            fh.write(json.dumps(runs[-1]) + "\n")
+    return write_baseline(args, runs)
+
+
+def write_baseline(args, runs):
     benches = {}
     for name in GATE:
         infos = [r["found"][name] for r in runs if name in r["found"]]
         if len(infos) < 2:
             continue
-        benches[name] = {"what": infos[0]["what"], "unit": infos[0]["unit"]}
-        for clock in RATIO_KEY:
-            ratios = [ratio_of(i, clock) for i in infos]
-            sp = spread(ratios)
-            benches[name][clock] = {
-                "ratios": ratios,
-                "values": [i["value"] for i in infos],
-                "values_cpu": [i.get("value_cpu") for i in infos],
-                **sp,
-                "threshold": max(MULTIPLE * sp["std_rel"], FLOOR),
-            }
+        benches[name] = {
+            "what": infos[0]["what"],
+            "unit": infos[0]["unit"],
+            "values": [i["value"] for i in infos],
+        }
+        for est in ESTIMATORS:
+            values = [ratio_of(i, est) for i in infos]
+            sp = spread(values)
+            benches[name][est] = {"ratios": values, **sp, "threshold": max(MULTIPLE * sp["std_rel"], FLOOR)}
+    timed = [n for n, b in benches.items() if b["unit"] == "s"]
+    score = (
+        {e: statistics.fmean(benches[n][e]["std_rel"] for n in timed) for e in ESTIMATORS} if timed else {}
+    )
+    estimator = args.estimator or (min(score, key=score.get) if score else DEFAULT_ESTIMATOR)
     out = {
         "host": socket.gethostname(),
         "cpu": cpu_model(),
@@ -286,18 +320,26 @@ def cmd_baseline(args):
         "loads_1min": [r["load_1min"] for r in runs],
         "run_wall_s": [r["wall_s"] for r in runs],
         "rule": f"threshold = max({MULTIPLE:g} x relative std of the ratio over the runs, {FLOOR:g})",
-        "clock": args.clock or CLOCK,
+        "estimator": estimator,
+        "mean_std_rel_by_estimator": score,
         "benchmarks": benches,
     }
     path = Path(args.baseline)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(out, indent=1) + "\n")
     print(f"baseline written to {path}")
+    print(
+        f"estimator: {estimator} (mean relative std over the timed benchmarks: "
+        + ", ".join(f"{e} {v:.2%}" for e, v in score.items())
+        + ")"
+    )
     for name, b in benches.items():
-        print(
-            f"  {name:20s} ratio mean {b['mean']:.4g}, std {b['std_rel']:.2%}, max deviation "
-            f"{b['max_dev_rel']:.2%}, threshold +{b['threshold']:.1%}"
-        )
+        for est in ESTIMATORS:
+            c = b[est]
+            print(
+                f"  {name:20s} {est:12s} mean {c['mean']:.4g}, std {c['std_rel']:.2%}, max deviation "
+                f"{c['max_dev_rel']:.2%}, threshold +{c['threshold']:.1%}"
+            )
     return 0
 
 
@@ -308,7 +350,7 @@ def cmd_repeat(args):
         return 2
     results = []
     for k in range(args.runs):
-        s = summary(run_suite(args.slowdown, args.k), baseline, Path(args.baseline), args.clock)
+        s = summary(run_suite(args.slowdown, args.k), baseline, Path(args.baseline), args.estimator)
         results.append(s)
         print(
             f"run {k + 1}/{args.runs} (slowdown {args.slowdown or 0:g}, load {s['load_1min']:.2f}): "
@@ -345,9 +387,9 @@ def main(argv=None):
             "--baseline", default=str(BASELINE), help=f"baseline file (default {BASELINE.relative_to(ROOT)})"
         )
         p.add_argument(
-            "--clock",
-            choices=list(RATIO_KEY),
-            help=f"ratio estimator (default: the baseline's choice, else {CLOCK})",
+            "--estimator",
+            choices=list(ESTIMATORS),
+            help=f"ratio estimator (default: the baseline's choice, else {DEFAULT_ESTIMATOR})",
         )
         if name != "baseline":
             p.add_argument(
@@ -360,6 +402,8 @@ def main(argv=None):
             )
         else:
             p.add_argument("--runs", type=int, default=10)
+        if name == "baseline":
+            p.add_argument("--from-raw", help=f"recompute from saved raw runs (e.g. {RAW.relative_to(ROOT)})")
         if name == "repeat":
             p.add_argument("--out", help="write every run's summary here (JSON)")
     args = ap.parse_args(argv)

@@ -24,19 +24,27 @@ def test_gate_lists_every_benchmark_of_bench_gate():
 
 
 def _run(ratio, ratio_cpu=None):
-    info = {"what": "w", "value": 1.0, "value_cpu": 1.0, "unit": "s", "ratio": ratio, "ratio_cpu": ratio_cpu}
-    return {
-        "found": {"water_step": info},
-        "missing": {
-            "two_phase_step": "skipped: two-phase coupling not built yet",
-            "soil_step": "failed: see the pytest output",
-        },
+    """A run whose water step takes `ratio` (wall) and `ratio_cpu` (CPU) calibrations every round."""
+    rounds = {
+        "wall": [ratio] * 5,
+        "cal_wall": [1.0] * 5,
+        "cpu": [ratio_cpu or ratio] * 5,
+        "cal_cpu": [1.0] * 5,
     }
+    info = {"what": "w", "value": ratio, "value_cpu": ratio_cpu, "unit": "s", "rounds": rounds}
+    missing = {
+        "two_phase_step": "skipped: two-phase coupling not built yet",
+        "soil_step": "failed: see the output",
+    }
+    return {"found": {"water_step": info}, "missing": missing}
 
 
 BASE = {
     "benchmarks": {
-        "water_step": {"wall": {"mean": 1.0, "threshold": 0.05}, "cpu": {"mean": 2.0, "threshold": 0.05}}
+        "water_step": {
+            "wall": {"mean": 1.0, "threshold": 0.05},
+            "cpu_paired": {"mean": 2.0, "threshold": 0.05},
+        }
     }
 }
 
@@ -51,13 +59,28 @@ def test_ratio_past_threshold_is_a_regression():
 
 
 def test_cpu_clock_uses_cpu_ratio():
-    rows = {r["name"]: r for r in gate.compare(_run(1.0, 2.2), BASE, "cpu")}
+    rows = {r["name"]: r for r in gate.compare(_run(1.0, 2.2), BASE, "cpu_paired")}
     assert rows["water_step"]["regressed"]  # 2.2 / 2.0 = +10 % > 5 %
 
 
 def test_no_baseline_gates_nothing():
     rows = {r["name"]: r for r in gate.compare(_run(5.0), None, "wall")}
     assert not rows["water_step"]["regressed"]
+
+
+def test_estimators_of_interleaved_rounds():
+    info = {
+        "value": 2.0,
+        "rounds": {
+            "wall": [2.0, 4.0, 3.0],
+            "cal_wall": [1.0, 2.0, 1.0],
+            "cpu": [1.0, 1.0, 1.0],
+            "cal_cpu": [1.0, 1.0, 1.0],
+        },
+    }
+    r = gate.ratios(info)
+    assert r["wall"] == 3.0 / 1.0 and r["wall_min"] == 2.0 and r["wall_paired"] == 2.0 and r["cpu"] == 1.0
+    assert set(gate.ratios({"value": 390.0, "rounds": {"wall": [390.0]}}).values()) == {390.0}  # a size
 
 
 def test_spread_and_threshold_rule():
