@@ -472,6 +472,9 @@ def accuracy_cost_figure(rows, experiment_runout, path):
             ax.axhline(limit, color="C0", ls=":", lw=1, label="runout error of the Richardson limit")
         ax.axhline(1000 * DIGITISATION, color="k", ls="--", lw=0.8, label="digitisation (3 mm)")
         ax.set(xscale="log", xlabel=f"{name} (s, one thread)", title=f"Column collapse: error against {name}")
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))  # 1-2-5 labels, plain
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.grid(alpha=0.3, which="both")
     axs[0].set_ylabel("error (mm)")
     axs[0].legend(fontsize=7)

@@ -7,6 +7,7 @@ import io
 import math
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -25,6 +26,13 @@ def number(v):
     except (TypeError, ValueError):
         return math.nan
     return v if math.isfinite(v) else math.nan
+
+
+def log_ticks(axis):
+    """Labels at 1, 2, 5 x 10^k in plain numbers (the default minor labels overlap)."""
+    axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
 def accuracy_columns(rows, declared):
@@ -89,6 +97,7 @@ def cost_figure(case, rows, columns, references=()):
                     )
             ax.set_xscale("log")
             ax.set_yscale("log")
+            log_ticks(ax.xaxis)
             ax.grid(alpha=0.3, which="both")
             ax.set_xlabel(name)
             if j == 0:
