@@ -4,7 +4,7 @@ This host's speed varies by 2x within an hour (other jobs share its 2 cores), so
 time alone says little. Each gate benchmark is timed interleaved with this kernel, and the gate
 compares the ratio benchmark time / calibration time, which the host's speed largely cancels.
 
-The kernel has the profile of an SPH pass: for each of 25,000 jittered 2D particles, a gather
+The kernel has the profile of an SPH pass: for each of n jittered 2D particles, a gather
 over a fixed Verlet list (about 21 neighbours at h = 1.3 dx, support 2h) reading position,
 velocity and density of the neighbour, a cubic-spline weight and gradient, and three
 accumulations (density rate, acceleration with a pressure and an artificial-viscosity-like
@@ -19,7 +19,7 @@ import time
 import numba
 import numpy as np
 
-N_SIDE = 158  # 158 x 158 = 24,964 particles, the size of the 25k step benchmarks
+N_SIDE = 158  # 158 x 158 = 24,964 particles (the gate makes one per benchmark size, `calibration(n)`)
 H_OVER_DX = 1.3
 SEED = 20261124
 
@@ -109,12 +109,13 @@ def pair_sum(start, index, x, v, rho, mass, h, drho, acc):
 
 
 class Calibration:
-    """The fixed workload, built once per process; `time_once()` runs it and returns seconds."""
+    """The fixed workload on n_side^2 particles, built once; `measure()` runs it and returns
+    (wall s, CPU s)."""
 
-    def __init__(self):
+    def __init__(self, n_side=N_SIDE):
         rng = np.random.default_rng(SEED)
-        dx = 1.0 / N_SIDE
-        g = (np.arange(N_SIDE) + 0.5) * dx
+        dx = 1.0 / n_side
+        g = (np.arange(n_side) + 0.5) * dx
         x = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
         x += rng.uniform(-0.15, 0.15, x.shape) * dx
         self.x = np.clip(x, 0.0, 1.0 - 1e-9)
@@ -142,15 +143,16 @@ class Calibration:
         return time.perf_counter() - t0, time.process_time() - c0
 
 
-_shared = None
+_shared = {}
 
 
-def calibration():
-    """The process's Calibration (built on first use)."""
-    global _shared
-    if _shared is None:
-        _shared = Calibration()
-    return _shared
+def calibration(n_particles=N_SIDE * N_SIDE):
+    """The process's Calibration of about n_particles particles (built on first use), so that a
+    benchmark is compared with a yardstick of its own working-set size."""
+    n_side = int(round(np.sqrt(n_particles)))
+    if n_side not in _shared:
+        _shared[n_side] = Calibration(n_side)
+    return _shared[n_side]
 
 
 if __name__ == "__main__":

@@ -1,11 +1,11 @@
 """The 2-rank MPI step of the benchmark gate, run under mpirun (benchmarks/bench_gate.py):
 
-    mpirun -n 2 python benchmarks/mpi_step.py --particles 50000 --rounds 20 --steps 5 --out stats.json
+    mpirun -n 2 python benchmarks/mpi_step.py --particles 10000 --rounds 150 --steps 1 --out stats.json
 
 Public calls only (Simulation(scene, comm).step()). Each round: both ranks time the calibration
-kernel at once (the step also occupies both cores), then both take `steps` steps between
-barriers. Rank 0 writes the per-round step times and calibration times. The controlled
-slowdown of benchmarks/slowdown.py, if set, spins after each rank's steps.
+kernel of their share of the particles at once (the step also occupies both cores), then both
+take `steps` steps between barriers. Rank 0 writes its per-round step and calibration times.
+The controlled slowdown of benchmarks/slowdown.py, if set, spins after each rank's steps.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def main(argv=None):
     from solver.simulation import Simulation
 
     comm = communicator()
-    cal = calibration()
+    cal = calibration(args.particles // max(comm.size, 1))  # each rank's share
     # disordered like the serial benchmarks, each rank its own jitter
     sim = disordered(
         Simulation(dam_break_scene(args.particles), comm=comm), seed=1 + getattr(comm, "rank", 0)

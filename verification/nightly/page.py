@@ -185,7 +185,7 @@ def bench_section(bench):
         f"{fmt(bench.get('load_1min'))}, {fmt(bench.get('wall_s'))} s; baselines: "
         f"{esc(bench.get('baseline_source', ''))}. The ratio divides a benchmark's time by the calibration "
         "kernel timed interleaved with it (benchmarks/calibration.py); the gate compares ratios, not "
-        "times.</p>"
+        f"times (estimator: {esc(bench.get('estimator', '?'))}; docs/benchmarks.md).</p>"
     )
     return head + table(
         [
