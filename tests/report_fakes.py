@@ -91,6 +91,12 @@ class Failing(Synthetic):
     VALUES = (0.1, 2.0)
 
 
+class KnownFailing(Failing):
+    """The failing check is declared a known failure: the case passes, the row says why."""
+
+    KNOWN_FAILURES = {"second synthetic metric": "a known failure of the test double"}
+
+
 class Raising:
     """run() raises: the case is recorded as crashed, the report goes on."""
 

@@ -22,10 +22,11 @@ CASES = {
     "small_hydro": "report_fakes:SmallHydrostatic",
     "synthetic": "report_fakes:Synthetic",
     "failing": "report_fakes:Failing",
+    "known": "report_fakes:KnownFailing",
     "raising": "report_fakes:Raising",
     "segfault": "report_fakes:Segfault",
 }
-EXPECTED_CHECKS = 3 + 2 + 2  # still water, synthetic, failing; the crashed cases have none
+EXPECTED_CHECKS = 3 + 2 + 2 + 2  # still water, synthetic, failing, known; the crashed cases have none
 
 BENCH = {
     "date": "2026-01-01T00:00:00+00:00",

@@ -11,7 +11,7 @@ import re
 import pytest
 from report_run import EXPECTED_CHECKS, shared_report_run
 
-from verification.nightly import history, plots
+from verification.nightly import collect, history, plots
 from verification.nightly.report import problems_of
 
 
@@ -28,6 +28,7 @@ def test_every_case_reported_and_failures_isolated(report_run):
         "small_hydro": "passed",
         "synthetic": "passed",
         "failing": "failed",
+        "known": "passed",
         "raising": "crashed",
         "segfault": "crashed",
     }
@@ -43,13 +44,14 @@ def test_every_case_reported_and_failures_isolated(report_run):
 
 def test_page_has_one_row_per_case_metric_and_no_external_resource(report_run):
     text = report_run.page.read_text()
-    rows = re.findall(r'<tr class="check (PASS|FAIL)"', text)
+    rows = re.findall(r'<tr class="check (PASS|FAIL|KNOWN)"', text)
     assert (
         len(rows)
         == EXPECTED_CHECKS
         == sum(len(r.get("run", {}).get("checks", [])) for r in report_run.results["cases"].values())
     )
-    assert rows.count("FAIL") == 1
+    assert rows.count("FAIL") == 1 and rows.count("KNOWN") == 1
+    assert "known failure: a known failure of the test double" in text
     assert "<script" not in text
     assert not re.search(r'(src|href)="(https?:)?//', text), "the page must work offline"
     assert (report_run.root / "latest" / "index.html").is_file()
@@ -96,6 +98,17 @@ def test_problems_name_the_failed_check():
     }
     (p,) = problems_of({"c": rec}, [])
     assert p["what"] == "c" and "m = 2 exceeds 1" in p["why"]
+
+
+def test_known_failure_that_passes_is_flagged_like_a_strict_xfail():
+    check = {"metric": "m", "value": 0.5, "tolerance": 1.0, "passed": True, "known_failure": "why"}
+    rec = {"run": {"checks": [check]}}
+    rec["status"] = collect.status(rec)
+    assert rec["status"] == "failed"
+    (p,) = problems_of({"c": rec}, [])
+    assert "known failure" in p["why"]
+    check["passed"] = False  # failing as expected: the case passes
+    assert collect.status(rec) == "passed"
 
 
 def test_trend_scaling_of_exact_requirements():

@@ -90,7 +90,12 @@ def test_report_page_in_headless_chromium(report_run, chromium, tmp_path):
     assert not broken, f"images that did not load: {broken}"
     rows = chromium.find_elements("css selector", "table#checks tbody tr.check")
     assert len(rows) == EXPECTED_CHECKS
-    assert sorted({r.get_attribute("data-case") for r in rows}) == ["failing", "small_hydro", "synthetic"]
+    assert sorted({r.get_attribute("data-case") for r in rows}) == [
+        "failing",
+        "known",
+        "small_hydro",
+        "synthetic",
+    ]
     problems = chromium.find_elements("css selector", "li.problem")
     assert len(problems) == 5  # failing, raising, segfault, the moved metric, the regressed benchmark
     errors = [e for e in chromium.get_log("browser") if e["level"] in ("SEVERE", "ERROR")]

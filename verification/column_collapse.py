@@ -86,6 +86,12 @@ STUDY_FILE = OUT / "resolution_study.csv"
 DIGITISATION = 0.003  # m, CSV header
 FAILURE_THRESHOLD = 0.005  # m: "moved less than" for the undisturbed zone
 METRICS = ("runout", "wall_height", "profile", "failure")
+# Checks expected to fail until the model changes (the nightly report shows them as known
+# failures and flags them if they pass, like the strict xfail in tests/test_verification.py)
+KNOWN_FAILURES = {
+    "failure-line RMS error in x (m)": "the SPH undisturbed-zone boundary lies ~1 cm from the experiment's "
+    "failure line and the error grows with refinement (verification/results/column_collapse/README.md)",
+}
 
 
 def spacing(resolution):

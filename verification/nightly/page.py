@@ -19,6 +19,7 @@ td.num { text-align: right; font-family: monospace; }
 tr.FAIL td, li.problem { background: #fde2e2; }
 tr.PASS td.verdict { color: #176317; font-weight: bold; }
 tr.FAIL td.verdict { color: #a00; font-weight: bold; }
+tr.KNOWN td { background: #fff3d6; } tr.KNOWN td.verdict { color: #8a5a00; }
 .banner { padding: 0.6em 1em; font-size: 1.2em; font-weight: bold; }
 .banner.ok { background: #dff3df; } .banner.bad { background: #fbd5d5; }
 img { max-width: 100%; border: 1px solid #ddd; margin: 0.3em 0; }
@@ -80,11 +81,18 @@ def checks_table(records):
     for name, rec in records.items():
         for c in rec.get("run", {}).get("checks", []):
             verdict = "PASS" if c["passed"] else "FAIL"
+            known = c.get("known_failure")
+            shown = verdict
+            if known:
+                verdict = "KNOWN" if not c["passed"] else "FAIL"
+                shown = (
+                    f"known failure: {known}" if not c["passed"] else "PASS, but listed as a known failure"
+                )
             rows.append(
                 f'<tr class="check {verdict}" data-case="{esc(name)}">'
                 f"<td>{esc(name)}</td><td>{esc(c['metric'])}</td>"
                 f'<td class="num">{esc(fmt(c["value"]))}</td><td class="num">{esc(fmt(c["tolerance"]))}</td>'
-                f'<td>{esc(c["source"])}</td><td class="verdict">{verdict}</td></tr>'
+                f'<td>{esc(c["source"])}</td><td class="verdict">{esc(shown)}</td></tr>'
             )
     rows.append("</tbody></table>")
     return "\n".join(rows)
@@ -212,6 +220,12 @@ def render(ctx):
     ok = not problems
     n_checks = sum(len(r.get("run", {}).get("checks", [])) for r in records.values())
     n_fail = sum(1 for r in records.values() for c in r.get("run", {}).get("checks", []) if not c["passed"])
+    n_known = sum(
+        1
+        for r in records.values()
+        for c in r.get("run", {}).get("checks", [])
+        if not c["passed"] and c.get("known_failure")
+    )
     out = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
@@ -226,7 +240,7 @@ def render(ctx):
         f" on {esc(meta.get('branch', ''))}; host {esc(meta['host'])} ({esc(meta['cpus'])} cores), "
         "1-min load "
         f"{fmt(meta['load_1min'])} at the start, {fmt(ctx.get('load_end'))} at the end. "
-        f"{len(records)} cases, {n_checks} checks, {n_fail} failed.</p>",
+        f"{len(records)} cases, {n_checks} checks, {n_fail} failed ({n_known} of them known failures).</p>",
         f"<p>{esc(ctx['timing_text'])}</p>",
         '<h2 id="problems">Problems</h2>',
     ]

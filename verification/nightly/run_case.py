@@ -108,6 +108,7 @@ def case_record(name, module_name, out, resolution=None, study=None, no_study=Fa
         "run",
         lambda: mod.run(resolution, out_dir=out) if resolution is not None else mod.run(out_dir=out),
     )
+    known = dict(getattr(mod, "KNOWN_FAILURES", {}))  # metric -> why it is expected to fail
     if res is not None:
         record["run"].update(
             resolution=res.resolution,
@@ -122,6 +123,7 @@ def case_record(name, module_name, out, resolution=None, study=None, no_study=Fa
                     "tolerance": c.tolerance,
                     "source": c.source,
                     "passed": c.passed,
+                    "known_failure": known.get(c.metric),
                 }
                 for c in res.checks
             ],
