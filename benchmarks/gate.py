@@ -40,6 +40,7 @@ BASELINE = HERE / "baselines" / "gate.json"
 RAW = ROOT / "runs" / "bench" / "baseline_runs.jsonl"
 MULTIPLE = 4.0
 FLOOR = 0.02
+RETRIES = 2  # re-measurements of a benchmark past its threshold before it is flagged
 # How a run's per-round times become one ratio (benchmark / calibration), by wall time
 # (perf_counter) or CPU time (process_time): the medians' ratio, the fastest rounds' ratio
 # (noise on a shared host only slows a round down), or the median of the per-round ratios
@@ -182,7 +183,7 @@ def compare(run, baseline, clock=DEFAULT_ESTIMATOR):
             "ratios": ratios(info),
             "load_1min": info.get("load_1min"),
             "slowdown": info.get("slowdown"),
-            "baseline_ratio": b["mean"] if b else None,
+            "baseline_ratio": b.get("median", b.get("mean")) if b else None,
             "threshold": b["threshold"] if b else None,
         }
         row["change"] = row["ratio"] / row["baseline_ratio"] - 1 if b else None
@@ -240,9 +241,35 @@ def load_baseline(path):
     return json.loads(path.read_text()) if path.exists() else None
 
 
+def gated_run(baseline, baseline_path, slowdown=None, select=None, estimator=None):
+    """One gate run, and up to RETRIES re-measurements of each benchmark past its threshold
+    (that benchmark alone); a benchmark keeps its lowest ratio over the attempts, so it is
+    flagged only if every attempt was past the threshold. Returns (summary, pytest output)."""
+    run = run_suite(slowdown, select)
+    s = summary(run, baseline, baseline_path, estimator)
+    attempts = dict.fromkeys(run["found"], 1)
+    for _ in range(RETRIES):
+        again = [r["name"] for r in s["benchmarks"] if r["regressed"] and r["name"] in run["found"]]
+        if not again:
+            break
+        for name in again:
+            retry = run_suite(slowdown, name)
+            attempts[name] += 1
+            if name in retry["found"] and ratio_of(retry["found"][name], s["estimator"]) < ratio_of(
+                run["found"][name], s["estimator"]
+            ):
+                run["found"][name] = retry["found"][name]
+            run["wall_s"] += retry["wall_s"]
+        s = summary(run, baseline, baseline_path, estimator)
+    for r in s["benchmarks"]:
+        r["attempts"] = attempts.get(r["name"], 1)
+    return s, run["output"]
+
+
 def cmd_check(args):
-    run = run_suite(args.slowdown, args.k)
-    s = summary(run, load_baseline(args.baseline), Path(args.baseline), args.estimator)
+    s, output = gated_run(
+        load_baseline(args.baseline), Path(args.baseline), args.slowdown, args.k, args.estimator
+    )
     print_summary(s)
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
@@ -250,19 +277,27 @@ def cmd_check(args):
     if s["regressed"]:
         print(f"benchmark gate: REGRESSION in {', '.join(s['regressed'])}")
         if any(r.get("error") for r in s["benchmarks"]):
-            print(run["output"])
+            print(output)
         return 1
     return 0
 
 
 def spread(values):
+    """Centre and spread of a benchmark's ratios over the baseline runs. The reference is the
+    median and the spread the MAD-based standard deviation (1.4826 x median absolute deviation,
+    relative): a run caught in one of the host's slow phases (every time on the machine 25-30 %
+    longer for minutes) must not widen the gate for all the others; `check` re-measures before
+    it flags (RETRIES), so such a phase does not raise a false alarm either."""
+    med = statistics.median(values)
+    mad = statistics.median(abs(v - med) for v in values)
     mean = statistics.fmean(values)
     std = statistics.stdev(values) if len(values) > 1 else 0.0
     return {
+        "median": med,
         "mean": mean,
-        "std": std,
         "std_rel": std / mean,
-        "max_dev_rel": max(abs(v / mean - 1) for v in values),
+        "mad_rel": 1.4826 * mad / med,
+        "max_dev_rel": max(abs(v / med - 1) for v in values),
         "min": min(values),
         "max": max(values),
     }
@@ -305,10 +340,10 @@ def write_baseline(args, runs):
         for est in ESTIMATORS:
             values = [ratio_of(i, est) for i in infos]
             sp = spread(values)
-            benches[name][est] = {"ratios": values, **sp, "threshold": max(MULTIPLE * sp["std_rel"], FLOOR)}
+            benches[name][est] = {"ratios": values, **sp, "threshold": max(MULTIPLE * sp["mad_rel"], FLOOR)}
     timed = [n for n, b in benches.items() if b["unit"] == "s"]
     score = (
-        {e: statistics.fmean(benches[n][e]["std_rel"] for n in timed) for e in ESTIMATORS} if timed else {}
+        {e: statistics.fmean(benches[n][e]["mad_rel"] for n in timed) for e in ESTIMATORS} if timed else {}
     )
     estimator = args.estimator or (min(score, key=score.get) if score else DEFAULT_ESTIMATOR)
     out = {
@@ -319,9 +354,11 @@ def write_baseline(args, runs):
         "runs": args.runs,
         "loads_1min": [r["load_1min"] for r in runs],
         "run_wall_s": [r["wall_s"] for r in runs],
-        "rule": f"threshold = max({MULTIPLE:g} x relative std of the ratio over the runs, {FLOOR:g})",
+        "rule": f"reference = median ratio over the runs; threshold = max({MULTIPLE:g} x MAD-based "
+        f"relative standard deviation, {FLOOR:g}); a benchmark past it is re-measured up to {RETRIES} "
+        "times and flagged only if every attempt is past it",
         "estimator": estimator,
-        "mean_std_rel_by_estimator": score,
+        "mean_mad_rel_by_estimator": score,
         "benchmarks": benches,
     }
     path = Path(args.baseline)
@@ -329,7 +366,7 @@ def write_baseline(args, runs):
     path.write_text(json.dumps(out, indent=1) + "\n")
     print(f"baseline written to {path}")
     print(
-        f"estimator: {estimator} (mean relative std over the timed benchmarks: "
+        f"estimator: {estimator} (mean MAD-based relative spread over the timed benchmarks: "
         + ", ".join(f"{e} {v:.2%}" for e, v in score.items())
         + ")"
     )
@@ -337,8 +374,8 @@ def write_baseline(args, runs):
         for est in ESTIMATORS:
             c = b[est]
             print(
-                f"  {name:20s} {est:12s} mean {c['mean']:.4g}, std {c['std_rel']:.2%}, max deviation "
-                f"{c['max_dev_rel']:.2%}, threshold +{c['threshold']:.1%}"
+                f"  {name:20s} {est:12s} median {c['median']:.4g}, MAD-std {c['mad_rel']:.2%}, std "
+                f"{c['std_rel']:.2%}, max deviation {c['max_dev_rel']:.2%}, threshold +{c['threshold']:.1%}"
             )
     return 0
 
@@ -350,12 +387,13 @@ def cmd_repeat(args):
         return 2
     results = []
     for k in range(args.runs):
-        s = summary(run_suite(args.slowdown, args.k), baseline, Path(args.baseline), args.estimator)
+        s, _ = gated_run(baseline, Path(args.baseline), args.slowdown, args.k, args.estimator)
         results.append(s)
         print(
             f"run {k + 1}/{args.runs} (slowdown {args.slowdown or 0:g}, load {s['load_1min']:.2f}): "
             + ", ".join(
                 f"{r['name']} {r['change']:+.1%}{'!' if r['regressed'] else ''}"
+                + (f" ({r['attempts']} attempts)" if r.get("attempts", 1) > 1 else "")
                 for r in s["benchmarks"]
                 if r.get("change") is not None
             ),

@@ -110,12 +110,14 @@ def make_report_run(tmp: Path) -> ReportRun:
         "--cases",
         ",".join(CASES),
         "--timeout",
+        "1800",
+        "--cpu-limit",
         "300",
     ]
     for name, spec in CASES.items():
         cmd += ["--case", f"{name}={spec}"]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests")])}
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT, timeout=3600)
     pages = sorted(p for p in root.glob("*/index.html") if p.parent.name != "latest")
     assert pages, proc.stdout + proc.stderr
     return ReportRun(

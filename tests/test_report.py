@@ -36,7 +36,7 @@ def test_every_case_reported_and_failures_isolated(report_run):
     assert ("case failed", "failing") in kinds
     assert ("case crashed", "raising") in kinds
     assert ("case crashed", "segfault") in kinds
-    assert any("status -11" in p["why"] for p in res["problems"] if p["what"] == "segfault")
+    assert any("SIGSEGV" in p["why"] for p in res["problems"] if p["what"] == "segfault")
     assert "RuntimeError: synthetic failure" in next(
         p["why"] for p in res["problems"] if p["what"] == "raising"
     )
@@ -119,3 +119,12 @@ def test_trend_scaling_of_exact_requirements():
 
 def test_results_json_is_strict_json(report_run):
     json.loads((report_run.page.parent / "results.json").read_text(), parse_constant=lambda c: 1 / 0)
+
+
+def test_a_killed_case_says_how():
+    import signal
+
+    assert "SIGXCPU" in collect._ended(-signal.SIGXCPU) and "CPU-time limit" in collect._ended(
+        -signal.SIGXCPU
+    )
+    assert collect._ended(3) == "process exited with status 3"

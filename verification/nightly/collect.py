@@ -1,9 +1,12 @@
 """Run every case of the nightly in its own process, one after the other.
 
-A case that raises, segfaults, runs out of memory or passes its timeout is recorded as
-crashed (with the end of its log) and the next case starts. The parent measures each child's
-wall time and CPU time (resource.getrusage of the waited child: the whole process, imports and
-compile included) and the 1-minute load before and after, beside the child's own timings.
+A case that raises, segfaults, runs out of memory, passes its CPU-time limit (RLIMIT_CPU: a
+runaway case, whatever the load) or its wall-time timeout (a case that hangs) is recorded as
+crashed (with the end of its log) and the next case starts. The wall timeout is generous: on
+this shared host a case can get 1-10 % of a core for an hour while other jobs run. The parent
+measures each child's wall time and CPU time (resource.getrusage of the waited child: the
+whole process, imports and compile included) and the 1-minute load before and after, beside
+the child's own timings.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import resource
+import signal
 import subprocess
 import sys
 import time
@@ -41,7 +45,25 @@ def status(record):
     return "passed"
 
 
-def run_case(name, module, out_dir, timeout, threads=1, flags=()):
+def _limit_cpu(seconds):
+    def apply():
+        resource.setrlimit(resource.RLIMIT_CPU, (int(seconds), int(seconds) + 10))
+
+    return apply
+
+
+def _ended(returncode):
+    if returncode < 0:
+        try:
+            return f"killed by {signal.Signals(-returncode).name}" + (
+                " (its CPU-time limit)" if -returncode == signal.SIGXCPU else ""
+            )
+        except ValueError:
+            return f"killed by signal {-returncode}"
+    return f"process exited with status {returncode}"
+
+
+def run_case(name, module, out_dir, timeout, threads=1, flags=(), cpu_limit=None):
     """Run one case in a child process; return its record (see run_case.py) with the parent's
     timings under 'process' and a 'status'."""
     out_dir = Path(out_dir)
@@ -67,12 +89,18 @@ def run_case(name, module, out_dir, timeout, threads=1, flags=()):
     with open(out_dir / "log.txt", "w") as log:
         try:
             proc = subprocess.run(
-                cmd, stdout=log, stderr=subprocess.STDOUT, env=env, timeout=timeout, cwd=ROOT
+                cmd,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=env,
+                timeout=timeout,
+                cwd=ROOT,
+                preexec_fn=_limit_cpu(cpu_limit) if cpu_limit else None,
             )
             if proc.returncode != 0:
-                crash = f"process exited with status {proc.returncode}"
+                crash = _ended(proc.returncode)
         except subprocess.TimeoutExpired:
-            crash = f"timed out after {timeout:.0f} s (killed)"
+            crash = f"timed out after {timeout:.0f} s of wall time (killed)"
     wall, cpu = time.perf_counter() - start, _children_cpu() - cpu_before
     record = json.loads(case_json.read_text()) if case_json.exists() else {"case": name, "module": module}
     if crash or not case_json.exists():
@@ -83,6 +111,8 @@ def run_case(name, module, out_dir, timeout, threads=1, flags=()):
         "load_1min_before": load_before,
         "load_1min_after": os.getloadavg()[0],
         "numba_threads": threads,
+        "cpu_limit_s": cpu_limit,
+        "timeout_s": timeout,
         "command": " ".join(cmd),
     }
     record["status"] = status(record)
@@ -96,12 +126,12 @@ def _tail(path, lines=40):
         return ""
 
 
-def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print):
+def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print, cpu_limit=None):
     """{name: record} for {name: module} in order."""
     records = {}
     for name, module in cases.items():
         progress(f"report: {name} ({module}) ...")
-        rec = run_case(name, module, Path(out_dir) / name, timeout, threads, flags)
+        rec = run_case(name, module, Path(out_dir) / name, timeout, threads, flags, cpu_limit)
         p = rec["process"]
         progress(
             f"report: {name}: {rec['status']} in {p['wall_s']:.0f} s wall, {p['cpu_s']:.0f} s CPU "

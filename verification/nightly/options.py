@@ -39,8 +39,15 @@ def add_arguments(p):
     p.add_argument(
         "--timeout",
         type=float,
+        default=6 * 3600.0,
+        help="wall seconds one case (run and study) may take before it is killed as hung (default 21600: "
+        "on a shared host a case can get a few percent of a core for an hour)",
+    )
+    p.add_argument(
+        "--cpu-limit",
+        type=float,
         default=3600.0,
-        help="seconds one case (run and study) may take (default 3600)",
+        help="CPU seconds one case may use before it is killed as runaway (RLIMIT_CPU; default 3600)",
     )
     p.add_argument(
         "--case-threads",

@@ -162,7 +162,9 @@ def main(args):
         f"load {meta['load_1min']:.2f})"
     )
     flags_ = ["--quick"] if args.quick else (["--no-study"] if args.no_study else [])
-    records = collect.run_all(cases, folder, args.timeout, args.case_threads, flags_)
+    records = collect.run_all(
+        cases, folder, args.timeout, args.case_threads, flags_, cpu_limit=args.cpu_limit
+    )
     bench, bench_problem = load_bench(args.bench_json)
     if bench is not None:
         (folder / "bench.json").write_text(json.dumps(bench, indent=1))
