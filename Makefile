@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 
 ## make run: set up .venv and run the default scene (2D dam break)
 run: $(STAMP)
-	$(BIN)/scoursph run $(SCENE) --out $(OUT)
+	$(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite
 
 ## make test: set up .venv, check the style (ruff, fast), run the test suite
 test: $(STAMP)

@@ -18,6 +18,8 @@ import pytest
 from dam_break_setup import dam_break
 from hand_fused import hand_fused_2d
 
+from solver.materials import Phase
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -45,8 +47,8 @@ def test_composed_vs_hand_fused(benchmark, variant):
     numba.set_num_threads(1)
     sim = dam_break(25_000)
     ps, m = sim.particles, sim.plan.materials
-    nl = sim.lists[("water", "water")]
-    from solver.physics import fluid
+    nl = sim.lists[(Phase.WATER, Phase.WATER)]
+    from solver.physics import fluid_rates as fluid
 
     args = (nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"])
     if variant == "composed":

@@ -1,10 +1,12 @@
 """Regenerate all full reference data (long: see reference_cases/README.md).
 
-    python -m reference_cases.run_all [--only openfoam|liggghts] [--meshes 20 40] [--nice 10]
+    python -m reference_cases.run_all [--only openfoam|seepage|nappe|liggghts] [--meshes 20 40] [--nice 10]
 
 OpenFOAM: the dam break on every mesh in --meshes (serial) and on the coarsest
-mesh with 2 ranks. LIGGGHTS: heap calibration, the reference collapse at the
-calibrated friction plus the sensitivity collapses (calibrate.py), and the
+mesh with 2 ranks; the steady seepage under a sheet pile (laplacianFoam and
+porousSimpleFoam, T/10 to T/80, about 1 min); the overflow nappe of the scour set-up at
+q = 0.06 and 0.11 on its three meshes (5, 3.33, 2.5 mm, serial). LIGGGHTS: heap calibration, the
+reference collapse at the calibrated friction plus the sensitivity collapses (calibrate.py), and the
 reference collapse again on 2 ranks. The steps run one at a time; their wall
 times go to reference_cases/run_all.json.
 """
@@ -25,7 +27,7 @@ HERE = Path(__file__).resolve().parent
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--only", choices=["openfoam", "liggghts"], default=None)
+    ap.add_argument("--only", choices=["openfoam", "seepage", "nappe", "liggghts"], default=None)
     ap.add_argument(
         "--meshes",
         type=int,
@@ -55,6 +57,19 @@ def main(argv=None) -> int:
         if not a.no_parallel:
             n = min(a.meshes)
             step(f"openfoam dx{n} np2", lambda: F.run_case(n, 2, keep_fields=False))
+    if a.only in (None, "seepage"):
+        from reference_cases.openfoam_seepage_2d import run as P
+
+        step("openfoam seepage (sheet pile, mesh study)", lambda: P.run_all())
+    if a.only in (None, "nappe"):
+        from reference_cases.openfoam_overflow_nappe import run as N
+
+        for q in N.STUDY_Q:
+            for dx in N.STUDY_DX_MM:
+                step(
+                    f"openfoam nappe q{q} dx{dx:.3g}mm",
+                    lambda q=q, dx=dx: N.run_case(q, dx, keep_fields=False),
+                )
     if a.only in (None, "liggghts"):
         from reference_cases.liggghts_column_collapse_2d import calibrate as K
         from reference_cases.liggghts_column_collapse_2d import run as R

@@ -1,6 +1,8 @@
 """The command line: `scoursph run SCENE`, `scoursph verify CASE`, `scoursph report`.
 
-Exit status: 0 success, 1 numerical blow-up (outputs so far are kept), 2 bad input.
+Exit status: 0 success, 1 numerical blow-up (outputs so far are kept) or a failed
+verification check, 2 bad input (scene file, option or output directory; nothing written).
+Every error is one line on standard error, starting "scoursph: error:".
 """
 
 from __future__ import annotations
@@ -10,17 +12,42 @@ import sys
 from pathlib import Path
 
 from solver.errors import BlowUpError, SceneError
+from solver.output.run_dir import RunDirError
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (the usage itself is in --help)."""
+
+    def error(self, message):
+        self.exit(2, f"scoursph: error: {self.prog}: {message} (see {self.prog} --help)\n")
+
+
+def _at_least_one(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
 
 
 def _parser():
-    p = argparse.ArgumentParser(prog="scoursph", description="ScourSPH: SPH for soil-water interaction")
+    p = _Parser(prog="scoursph", description="ScourSPH: SPH for soil-water interaction")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run a scene file")
-    r.add_argument("scene", type=Path)
+    r.add_argument(
+        "scene", type=Path, help="a scene file, or the name of a shipped scene (e.g. dam_break_2d)"
+    )
     r.add_argument("--out", type=Path, help="output directory (default runs/<scene name>)")
+    r.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an earlier run in the output directory (only the files a run writes are removed)",
+    )
     r.add_argument("--explain", action="store_true", help="print the plan (passes, terms, fields) and exit")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
-    r.add_argument("--threads", type=int, help="Numba threads per process")
+    r.add_argument("--threads", type=_at_least_one, help="Numba threads per process (at least 1)")
     r.add_argument(
         "--set",
         action="append",
@@ -60,9 +87,14 @@ def _fail(message, status):
 
 def main(argv=None):
     args = _parser().parse_args(argv)
-    if getattr(args, "threads", None):
+    if getattr(args, "threads", None) is not None:
         import numba
 
+        most = numba.config.NUMBA_NUM_THREADS
+        if args.threads > most:
+            return _fail(
+                f"--threads: at most {most} here (NUMBA_NUM_THREADS or the core count), got {args.threads}", 2
+            )
         numba.set_num_threads(args.threads)
     if args.command == "run":
         return _run(args)
@@ -76,7 +108,7 @@ def main(argv=None):
 def _run(args):
     from solver.parallel.launch import communicator
     from solver.plan import build_plan, explain
-    from solver.scene import load_scene
+    from solver.scene import load_scene, resolve_scene_path
 
     comm = communicator()
     if comm.size > 1:
@@ -87,7 +119,8 @@ def _run(args):
     if args.imbalance_threshold is not None:
         overrides.append(f"parallel.imbalance_threshold={args.imbalance_threshold}")
     try:
-        scene = load_scene(args.scene, overrides)
+        scene = load_scene(resolve_scene_path(args.scene), overrides)
+        _check_memory(scene, comm.size, args.scene)
     except SceneError as exc:
         if comm.is_root():
             _fail(str(exc), 2)
@@ -100,10 +133,14 @@ def _run(args):
 
     out = args.out or Path("runs") / scene.scene.name
     try:
-        result = run_scene(scene, out, comm=comm, quiet=args.quiet)
+        result = run_scene(scene, out, comm=comm, quiet=args.quiet, overwrite=args.overwrite)
+    except RunDirError as exc:
+        if comm.is_root():
+            _fail(f"--out {exc}", 2)
+        return 2
     except BlowUpError as exc:
         if comm.is_root():
-            _fail(f"{exc}\n  outputs written so far are kept in {out}/", 1)
+            _fail(f"{exc}; outputs written so far are kept in {out}/", 1)
         return 1
     if comm.is_root():
         print(
@@ -116,6 +153,32 @@ def _run(args):
             "scene.toml, run.json"
         )
     return 0
+
+
+# Resident memory per particle measured for the 2D dam break (README "Speed"): a lower bound,
+# so a scene is refused only when it certainly does not fit.
+BYTES_PER_PARTICLE = 391
+
+
+def _check_memory(scene, ranks, path):
+    """Bad input (exit 2) if the particles alone would not fit in this machine's memory."""
+    import os
+
+    from solver.geometry import estimated_particles
+
+    try:
+        memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return
+    n = estimated_particles(scene)
+    need = n * BYTES_PER_PARTICLE / max(ranks, 1)
+    if need > memory:
+        raise SceneError(
+            path,
+            "scene.spacing",
+            f"about {n:.3g} particles need at least {need / 2**30:.1f} GiB per process, "
+            f"more than this machine's {memory / 2**30:.1f} GiB",
+        )
 
 
 def _share_cores_among_ranks(comm, explicit):

@@ -42,3 +42,52 @@ def block_top(block) -> float:
     if isinstance(block, RectangleBlock):
         return float(block.max[-1])
     return float(np.max(np.asarray(block.vertices)[:, -1]))
+
+
+def block_span(block) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners of a block's bounding box."""
+    if isinstance(block, RectangleBlock):
+        return np.asarray(block.min, float), np.asarray(block.max, float)
+    verts = np.asarray(block.vertices, float)
+    return verts.min(axis=0), verts.max(axis=0)
+
+
+def estimated_particles(scene: Scene) -> float:
+    """Particle count from the blocks' extents (an upper bound of the lattice count, cheap:
+    computed before any lattice is built, so a far too small spacing is refused at once)."""
+    dx = scene.scene.spacing
+    total = 0.0
+    for block in scene.blocks:
+        lo, hi = block_span(block)
+        with np.errstate(over="ignore"):  # inf for far too many: refused by the caller
+            total += float(np.prod(np.floor((hi - lo) / dx) + 1.0))
+    return total
+
+
+def _lattice_index(points, origin, dx):
+    """Integer lattice coordinates of lattice points (exact: points sit at (i + 1/2) dx)."""
+    return np.rint((points - origin) / dx - 0.5).astype(np.int64)
+
+
+def overlapping_blocks(scene: Scene):
+    """((i, j), n): a pair of blocks i < j that put particles at n shared lattice sites, or
+    None. Blocks that merely touch share no site: a lattice point belongs to the block whose
+    [min, max) holds it."""
+    origin = np.asarray(scene.domain.min, dtype=float)
+    dx = scene.scene.spacing
+    idx = [_lattice_index(block_points(b, scene), origin, dx) for b in scene.blocks]
+    labels = np.concatenate([np.full(len(a), j) for j, a in enumerate(idx)])
+    if len(labels) == 0:
+        return None
+    sites = np.concatenate(idx) + 1  # blocks lie in the domain: indices from -1 up
+    shape = sites.max(axis=0) + 1
+    keys = np.ravel_multi_index(tuple(sites.T), tuple(shape))
+    order = np.argsort(keys, kind="stable")  # stable: equal keys keep block order
+    keys, labels = keys[order], labels[order]
+    dup = np.flatnonzero(keys[1:] == keys[:-1])
+    if not len(dup):
+        return None
+    pairs = np.stack([labels[dup], labels[dup + 1]], axis=1)
+    first = pairs[np.lexsort((pairs[:, 0], pairs[:, 1]))[0]]  # the lowest j, then the lowest i
+    n = int(np.sum(np.all(pairs == first, axis=1)))
+    return (int(first[0]), int(first[1])), n

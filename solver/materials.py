@@ -1,26 +1,37 @@
 """Material models and their parameters, flattened into per-material arrays for kernels.
 
 Each material gets an integer id (its order in the scene) and a phase: particles of one
-phase interact through that phase's terms (water-water: seed eqs. 6-11, 19, 22).
-Soil (issue 3) adds its own phase; soil-water coupling is a separate interaction term.
+phase interact through that phase's terms (water-water: seed eqs. 6-11, 19, 22; soil-soil:
+seed eqs. 12-17, 19, 20); terms between phases (seepage) sum over the other phase.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import IntEnum
 
 import numpy as np
 
 from .scene import Scene, Soil, Water
 
-PHASE_WATER = 0
-PHASE_SOIL = 1
-YIELD_ELASTIC, YIELD_MOHR_COULOMB, YIELD_DRUCKER_PRAGER = 0, 1, 2
-YIELD_IDS = {
-    "elastic": YIELD_ELASTIC,
-    "mohr_coulomb": YIELD_MOHR_COULOMB,
-    "drucker_prager": YIELD_DRUCKER_PRAGER,
-}
+
+class Phase(IntEnum):
+    """The phase of a material: which terms act on its particles."""
+
+    WATER = 0
+    SOIL = 1
+
+    @property
+    def label(self):
+        return self.name.lower()
+
+
+class YieldModel(IntEnum):
+    """Soil yield criterion, as the integer the return-mapping kernel branches on."""
+
+    ELASTIC = 0  # no yield (checks)
+    MOHR_COULOMB = 1  # seed eq. (16)
+    DRUCKER_PRAGER = 2  # Bui et al. (2008)
 
 
 @dataclass(frozen=True)
@@ -34,7 +45,7 @@ class SoilConstants:
     alpha_phi: np.ndarray  # Drucker-Prager plane-strain fit (Bui et al. 2008, eq. 27)
     k_c: np.ndarray
     alpha_psi: np.ndarray  # same fit with the dilatancy angle (non-associated flow)
-    yield_model: np.ndarray  # int32, YIELD_*
+    yield_model: np.ndarray  # int32, YieldModel
 
 
 def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
@@ -58,7 +69,7 @@ def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
         cols["alpha_phi"][k] = tphi / np.sqrt(9.0 + 12.0 * tphi**2)  # Bui et al. (2008), plane strain
         cols["k_c"][k] = 3.0 * mat.cohesion / np.sqrt(9.0 + 12.0 * tphi**2)
         cols["alpha_psi"][k] = tpsi / np.sqrt(9.0 + 12.0 * tpsi**2)
-        model[k] = YIELD_IDS[mat.yield_model]
+        model[k] = YieldModel[mat.yield_model.upper()]
     return SoilConstants(yield_model=model, **cols) if any_soil else None
 
 
@@ -80,13 +91,11 @@ class MaterialTable:
     def index(self, name):
         return self.names.index(name)
 
-    def ids_of_phase(self, phase):
+    def ids_of_phase(self, phase: Phase):
         return [k for k in range(len(self.names)) if self.phase[k] == phase]
 
-
-def tait_pressure(rho, rho0, b, exponent):
-    """Seed eq. (9): p = B [(rho/rho0)^lambda - 1] (NumPy form, for set-up and tests)."""
-    return b * ((rho / rho0) ** exponent - 1.0)
+    def has_phase(self, phase: Phase):
+        return bool(self.ids_of_phase(phase))
 
 
 def tait_density(p, rho0, b, exponent):
@@ -105,7 +114,7 @@ def build_material_table(scene: Scene) -> MaterialTable:
     for k, name in enumerate(names):
         mat = scene.materials[name]
         if isinstance(mat, Water):
-            phase[k] = PHASE_WATER
+            phase[k] = Phase.WATER
             c = mat.sound_speed
             cols["rho0"][k] = mat.density
             cols["sound_speed"][k] = c
@@ -113,7 +122,7 @@ def build_material_table(scene: Scene) -> MaterialTable:
             cols["eos_b"][k] = mat.density * c * c / mat.eos_exponent  # B = rho0 c^2 / lambda (seed 2.1)
             cols["viscosity"][k] = mat.viscosity
         elif isinstance(mat, Soil):
-            phase[k] = PHASE_SOIL
+            phase[k] = Phase.SOIL
             cols["rho0"][k] = mat.density
             cols["sound_speed"][k] = mat.sound_speed  # c = sqrt((K + 4G/3) / rho0)
         av = scene.artificial_viscosity(name)

@@ -15,6 +15,7 @@ import numpy as np
 from numba import prange
 
 from .config import kernel
+from .kernels import SUPPORT_RADIUS
 
 
 @dataclass
@@ -175,3 +176,8 @@ class CellList:
     def owned_cell_order(self, n_owned):
         """Permutation putting the first n_owned rows in cell order (stable)."""
         return np.argsort(self.cells[:n_owned], kind="stable")
+
+
+def verlet_radius(scene):
+    """Radius of the Verlet lists: the kernel support 2h plus the skin (numerics.neighbour_skin)."""
+    return SUPPORT_RADIUS * scene.h + scene.numerics.neighbour_skin * scene.h

@@ -11,8 +11,19 @@ a run; every particle keeps a global id for life.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
+
+
+class Mirror(Enum):
+    """How a wall image particle takes a field from its source (seed sec. 2.5, eq. 23)."""
+
+    NONE = "not needed on images"
+    POSITION = "x' = s x + o"
+    VELOCITY = "v' = s v (free slip: normal part reversed; no slip: all reversed)"
+    SCALAR = "copied"
+    TENSOR = "T'_ab = s_a s_b T_ab (eq. 23; kept across no-slip walls)"
 
 
 @dataclass(frozen=True)
@@ -20,6 +31,9 @@ class FieldSpec:
     components: int  # 0 for a scalar, else the size of the trailing axis
     dtype: type
     reason: str  # which term needs it (printed by --explain)
+    mirror: Mirror = Mirror.NONE  # how images get it, if a term reads it from neighbours
+    constant: bool = False  # never changes for a particle: ghosts and images get it at rebuilds only
+    default: float = 0.0  # the value of a new particle that is not given one (append_owned)
 
     def nbytes_per_particle(self):
         return np.dtype(self.dtype).itemsize * max(self.components, 1)
@@ -83,11 +97,14 @@ class ParticleSet:
     def append_owned(self, **fields):
         """Add owned particles (set-up, inflow, migration); new ids unless `id` is given."""
         n_new = len(next(iter(fields.values())))
+        unknown = set(fields) - set(self.arrays)
+        if unknown:
+            raise KeyError(f"no such particle field(s): {', '.join(sorted(unknown))}")
         self.drop_halo()
         self.ensure_capacity(self.n_owned + n_new)
         rows = slice(self.n_owned, self.n_owned + n_new)
-        for name, values in fields.items():
-            self.arrays[name][rows] = values
+        for name, array in self.arrays.items():  # fields not given start at their default
+            array[rows] = fields.get(name, self.specs[name].default)
         if "id" not in fields:
             self.arrays["id"][rows] = np.arange(self.next_id, self.next_id + n_new)
         self.next_id = max(self.next_id, int(self.arrays["id"][rows].max()) + 1) if n_new else self.next_id

@@ -1,7 +1,9 @@
 """Run a scene: set up, step to each output time, write snapshots, report.
 
-The output directory is created only after the scene has been validated and the solver
-set up, so bad input never leaves a half-made run behind.
+The output directory is checked before anything is computed and claimed (created, marked as
+a ScourSPH run) only after the scene has been validated and the solver set up, so bad input
+never leaves a half-made run behind. A run never deletes what it did not write
+(solver/output/run_dir.py).
 """
 
 from __future__ import annotations
@@ -9,7 +11,6 @@ from __future__ import annotations
 import datetime
 import json
 import platform
-import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from .output.atomic import atomic_write_text
 from .output.fields import OUTPUT_TO_ARRAY, requested_fields
 from .output.hdf5_writer import Hdf5Series
 from .output.render import render_snapshot
+from .output.run_dir import RunDirError, check, claim
 from .output.vtk_writer import VtkSeries
 from .parallel.communicator import SerialCommunicator
 from .scene import Scene, scene_to_toml
@@ -97,18 +99,35 @@ def run_metadata(scene: Scene, comm, threads):
     }
 
 
-def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True) -> RunResult:
+def _on_root(action, out_dir, comm):
+    """action() on the root rank; its RunDirError raised on every rank (no rank left waiting)."""
+    reason = None
+    if comm.is_root():
+        try:
+            action()
+        except RunDirError as exc:
+            reason = exc.reason
+    reason = comm.bcast(reason)
+    if reason is not None:
+        raise RunDirError(out_dir, reason)
+
+
+def run_scene(scene: Scene, out_dir, comm=None, quiet=False, write=True, overwrite=False) -> RunResult:
+    """Run a scene; with `write`, into out_dir (refused with RunDirError, before any set-up,
+    if it is not empty and not an earlier run, or is an earlier run and not `overwrite`)."""
     comm = comm or SerialCommunicator()
-    sim = Simulation(scene, comm=comm)
     out_dir = Path(out_dir)
+    mode = "overwrite" if overwrite else "new"
+    if write:  # refused before any work: writes nothing
+        _on_root(lambda: check(out_dir, mode), out_dir, comm)
+    sim = Simulation(scene, comm=comm)
+    if write:
+        _on_root(lambda: claim(out_dir, scene.scene.name, mode), out_dir, comm)
     threads = numba.get_num_threads()
     writers = []
     names = requested_fields(scene, sim.particles)
     arrays = [OUTPUT_TO_ARRAY[n] for n in names if n != "rank"]
     if write and comm.is_root():
-        if out_dir.exists():
-            shutil.rmtree(out_dir)
-        out_dir.mkdir(parents=True)
         scene_text = scene_to_toml(scene)
         atomic_write_text(out_dir / "scene.toml", scene_text)
         meta = run_metadata(scene, comm, threads)

@@ -1,41 +1,101 @@
 """Parse and validate a scene file (TOML): the single source of a run's set-up.
 
 The scene is deep-merged over `defaults.toml`, then validated by the pydantic models
-below. Unknown keys are refused. Every error names the file, the dotted key and the
-reason, so the CLI can print it and exit with status 2 before anything is written.
+below. Unknown keys are refused. Types are strict (a boolean is not a number, a number is
+not a boolean or a string; an integer is accepted where a float is meant) and every float
+must be finite. Every error names the file, the dotted key and the reason, so the CLI can
+print it and exit with status 2 before anything is written.
+
+Besides the per-key rules, a scene must be runnable on a real machine: at most
+MAX_PARTICLES particles, MAX_CELLS neighbour cells over the domain, MAX_SNAPSHOTS output
+times and MAX_STEPS time steps by an a-priori estimate of dt (see `_check_resources`).
 """
 
 from __future__ import annotations
 
 import copy
+import math
+import re
 import tomllib
+from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, TypeVar, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    create_model,
+    field_validator,
+    model_validator,
+)
 
 from .errors import SceneError
 
 DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
+SCENES_DIR = Path(__file__).with_name("scenes")  # the scenes shipped with the package
+
+# Limits of a runnable scene (the issue-13 decision; README "Scenes"). Far above any run this
+# code targets, low enough that a typo (a spacing in mm written as m, a huge end time) is
+# refused at once instead of exhausting memory or running for years.
+MAX_PARTICLES = 1_000_000_000  # ~400 GB at the measured 391 B per particle (README "Speed")
+MAX_CELLS = 1_000_000_000  # neighbour cells of size 2h over the domain: 8 GB of cell starts
+MAX_SNAPSHOTS = 100_000  # output times: one HDF5 and one VTK file each, in one directory
+MAX_STEPS = 1_000_000_000  # a-priori steps: 4.6 days for 1000 particles at 2.5 M particle-steps/s
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
 WallKind = Literal["free_slip", "no_slip", "frictional"]
 OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
+# what a picture (output.render_field) can colour by -> the output field it needs (None: always written)
+RENDER_FIELDS = {
+    "speed": "velocity",
+    "density": "density",
+    "pressure": "pressure",
+    "mass": "mass",
+    "material": None,
+    "rank": None,
+}
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # strict: no bool -> number, number -> str or str -> number coercion (an int is still a float)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+E = TypeVar("E")
+# an option spelled as a string in the scene, one of an enum's values (strict mode would want the enum)
+Choice = Annotated[E, Field(strict=False)]
+
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 
 class SceneInfo(Strict):
     name: str
     description: str = ""
-    dimension: Literal[1, 2, 3]
+    dimension: int
     spacing: Positive
     end_time: Positive
     gravity: list[float]
+
+    @field_validator("name")
+    @classmethod
+    def _plain_name(cls, v):
+        if not _NAME.fullmatch(v):
+            raise ValueError(
+                "must be a plain name (letters, digits, '.', '_', '-'; not starting with '.' or '-'): "
+                "it names the default output directory runs/<name>"
+            )
+        return v
+
+    @field_validator("dimension")
+    @classmethod
+    def _two_or_three(cls, v):
+        if v not in (2, 3):
+            raise ValueError(f"must be 2 or 3, got {v} (the kernels and walls are written for 2D and 3D)")
+        return v
 
 
 class Domain(Strict):
@@ -90,9 +150,12 @@ class Soil(Strict):
     cohesion: NonNegative
     dilatancy_angle: Annotated[float, Field(ge=0.0, lt=90.0)] = 0.0  # degrees (Drucker-Prager only)
     yield_model: Literal["mohr_coulomb", "drucker_prager", "elastic"] = "mohr_coulomb"
-    bulk_modulus: Positive | None = (
-        None  # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
-    )
+    # a reduced K for eq. (17) (seed 2.2, after Bui 2007); None: E / 3(1 - 2 nu)
+    bulk_modulus: Positive | None = None
+    # water-soil coupling (seed eq. 18), required when the scene has water (the seed gives neither):
+    # porosity n (then `density` is the dry density (1 - n) rho_grain) and hydraulic conductivity k
+    porosity: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
+    permeability: Positive | None = None  # m/s
 
     @property
     def shear_modulus(self):
@@ -114,6 +177,27 @@ class Soil(Strict):
 
 
 Material = Annotated[Union[Water, Soil], Field(discriminator="model")]
+MODELS = {"water": Water, "soil": Soil}
+
+
+def _defaults_model(cls):
+    """The [material_defaults.<model>] table: every key of the model except `model`, optional,
+    with the model's own constraints."""
+    fields = {}
+    for name, info in cls.model_fields.items():
+        if name == "model":
+            continue
+        ann = Annotated[(info.annotation, *info.metadata)] if info.metadata else info.annotation
+        fields[name] = (ann | None, None)
+    return create_model(f"{cls.__name__}Defaults", __base__=Strict, **fields)
+
+
+class MaterialDefaults(Strict):
+    """Per-model defaults, filled into every material of that model that leaves the key out;
+    a scene may change them (its values are honoured like the file's)."""
+
+    water: _defaults_model(Water) | None = None
+    soil: _defaults_model(Soil) | None = None
 
 
 class RectangleBlock(Strict):
@@ -125,6 +209,9 @@ class RectangleBlock(Strict):
     hydrostatic: bool = False
     geostatic: bool = False  # soil: start at sigma_v = rho g depth, sigma_h = K0 sigma_v
     fixed: bool = False  # wall particles: never moved, contribute to neighbour sums
+    saturated: bool = False  # soil: pore-water particles fill the block (docs/seepage.md)
+    water_table: float | None = None  # saturated: level of the free water surface (default: see docs)
+    pore_water: str | None = None  # saturated: the water material (default: the scene's only one)
 
 
 class PolygonBlock(Strict):
@@ -135,6 +222,9 @@ class PolygonBlock(Strict):
     hydrostatic: bool = False
     geostatic: bool = False
     fixed: bool = False
+    saturated: bool = False
+    water_table: float | None = None
+    pore_water: str | None = None
 
 
 Block = Annotated[Union[RectangleBlock, PolygonBlock], Field(discriminator="shape")]
@@ -149,7 +239,29 @@ class Cfl(Strict):
     sound: Positive
     force: Positive
     viscous: Positive
+    drag: Positive = 1.0  # dt <= drag / lambda_max of the seepage drag (docs/seepage.md)
     collapse_fraction: Positive
+
+
+class Leapfrog(StrEnum):
+    """Time levels of the leap-frog (numerics.leapfrog)."""
+
+    SEED = "seed"  # rho and v at half steps (seed eqs. 24-25)
+    SYMPLECTIC_DENSITY = "symplectic_density"  # rho at whole steps, from v at n+1/2 after the drift
+
+
+class ImagePressure(StrEnum):
+    """What an image particle's pressure (soil: normal stress) is (numerics.image_pressure)."""
+
+    MIRROR = "mirror"  # its source's (seed sec. 2.5)
+    HYDROSTATIC = "hydrostatic"  # its source's plus the static increment between the two points
+
+
+class Seepage(StrEnum):
+    """The water-soil coupling (numerics.seepage; docs/seepage.md)."""
+
+    MIXTURE = "mixture"  # drag n^2 gamma_w dv / k plus the pore pressure on the skeleton (Bui & Nguyen 2017)
+    SEED = "seed"  # the seed's eqs. (18), (20), (21): the seepage force only
 
 
 class Numerics(Strict):
@@ -160,8 +272,9 @@ class Numerics(Strict):
     neighbour_skin: Annotated[float, Field(ge=0.0, le=2.0)]
     cfl: Cfl
     artificial_viscosity: dict[str, ArtificialViscosity] = {}
-    leapfrog: Literal["seed", "symplectic_density"] = "seed"
-    image_pressure: Literal["mirror", "hydrostatic"] = "mirror"
+    leapfrog: Choice[Leapfrog] = Leapfrog.SEED
+    image_pressure: Choice[ImagePressure] = ImagePressure.MIRROR
+    seepage: Choice[Seepage] = Seepage.MIXTURE
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off
@@ -174,6 +287,13 @@ class Output(Strict):
     vtk: bool
     render: bool
     render_field: str
+
+    @field_validator("times")
+    @classmethod
+    def _some_times(cls, v):
+        if v is not None and not v:
+            raise ValueError("needs at least one output time (or leave it out and give an interval)")
+        return v
 
 
 class Parallel(Strict):
@@ -194,8 +314,8 @@ class Scene(Strict):
     numerics: Numerics
     output: Output
     parallel: Parallel = Parallel()
-    material_defaults: dict[str, dict] = {}
-    artificial_viscosity_defaults: dict[str, ArtificialViscosity] = {}
+    material_defaults: MaterialDefaults = MaterialDefaults()
+    artificial_viscosity_defaults: dict[Literal["water", "soil"], ArtificialViscosity] = {}
 
     @property
     def dim(self):
@@ -259,6 +379,18 @@ def _check_consistency(s: Scene):
         raise _Inconsistent("materials", "at least one material is needed")
     if not s.blocks:
         raise _Inconsistent("blocks", "at least one particle block is needed")
+    has_soil = any(isinstance(m, Soil) for m in s.materials.values())
+    if not has_soil:
+        for key, value in (
+            ("artificial_stress", s.numerics.artificial_stress),
+            ("settling_time", s.numerics.settling_time),
+        ):
+            if value > 0:
+                raise _Inconsistent(
+                    f"numerics.{key}", f"= {value} acts on soil only, and this scene has no soil material"
+                )
+        if "frictional" in s.walls.kinds():
+            raise _Inconsistent("walls", "a 'frictional' wall acts on soil only, and this scene has no soil")
     eps = 1e-9 * float(np.max(hi - lo))
     for k, block in enumerate(s.blocks):
         key = f"blocks[{k}]"
@@ -276,13 +408,19 @@ def _check_consistency(s: Scene):
         else:
             if dim != 2:
                 raise _Inconsistent(f"{key}.shape", "polygons are 2D only")
-            corners = np.array(block.vertices, float)
-            if corners.ndim != 2 or corners.shape[1] != 2 or len(corners) < 3:
+            if len(block.vertices) < 3 or any(len(v) != 2 for v in block.vertices):
                 raise _Inconsistent(f"{key}.vertices", "needs three or more [x, y] points")
-        if getattr(block, "geostatic", False) and not isinstance(s.materials[block.material], Soil):
+            corners = np.array(block.vertices, float)
+        if block.geostatic and not isinstance(s.materials[block.material], Soil):
             raise _Inconsistent(
                 f"{key}.geostatic", "only soil blocks can start geostatic (water: hydrostatic)"
             )
+        if block.hydrostatic and not isinstance(s.materials[block.material], Water):
+            raise _Inconsistent(
+                f"{key}.hydrostatic", "only water blocks can start hydrostatic (soil: geostatic = true)"
+            )
+        if block.hydrostatic and block.geostatic:
+            raise _Inconsistent(f"{key}", "hydrostatic and geostatic exclude each other")
         if np.any(corners < lo - eps) or np.any(corners > hi + eps):
             raise _Inconsistent(key, "lies (partly) outside the domain")
         extent = corners.max(axis=0) - corners.min(axis=0)
@@ -290,14 +428,125 @@ def _check_consistency(s: Scene):
             raise _Inconsistent(
                 "scene.spacing", f"{dx} m is larger than block '{block.name}' ({extent.min():.4g} m)"
             )
-    if s.numerics.leapfrog != "seed" and any(m.model != "water" for m in s.materials.values()):
+    if s.numerics.leapfrog != Leapfrog.SEED and any(m.model != "water" for m in s.materials.values()):
         raise _Inconsistent("numerics.leapfrog", "symplectic_density is implemented for water-only scenes")
     for name in s.numerics.artificial_viscosity:
         if name not in s.materials:
             raise _Inconsistent(f"numerics.artificial_viscosity.{name}", "no material of that name")
+    if "pressure" in s.output.fields and not any(isinstance(m, Water) for m in s.materials.values()):
+        raise _Inconsistent(
+            "output.fields",
+            "'pressure' is the water pressure (Tait EOS), and this scene has no water material",
+        )
+    field = s.output.render_field
+    if field not in RENDER_FIELDS:
+        raise _Inconsistent(
+            "output.render_field",
+            f"'{field}' is not a field a picture can show (one of: {', '.join(RENDER_FIELDS)})",
+        )
+    if RENDER_FIELDS[field] is not None and RENDER_FIELDS[field] not in s.output.fields:
+        raise _Inconsistent(
+            "output.render_field", f"'{field}' needs '{RENDER_FIELDS[field]}' in output.fields"
+        )
+    if s.output.times is None and s.scene.end_time / s.output.interval > MAX_SNAPSHOTS:
+        raise _Inconsistent(
+            "output.interval",
+            f"gives {s.scene.end_time / s.output.interval:.3g} snapshots, more than {MAX_SNAPSHOTS}",
+        )
+    if s.output.times is not None and len(s.output.times) > MAX_SNAPSHOTS:
+        raise _Inconsistent("output.times", f"more than {MAX_SNAPSHOTS} output times")
     times = s.output_times()
     if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
+    _check_seepage(s)
+    _check_resources(s)
+    from .geometry import overlapping_blocks  # geometry imports this module
+
+    overlap = overlapping_blocks(s)
+    if overlap is not None:
+        (i, j), n = overlap
+        raise _Inconsistent(
+            f"blocks[{j}]",
+            f"overlaps blocks[{i}] ('{s.blocks[i].name}') in {n} particle position(s): two particles "
+            "at one place double the density there",
+        )
+
+
+def _check_seepage(s: Scene):
+    """Water that can reach soil needs the soil's n and k; saturated blocks need pore water."""
+    waters = [name for name, m in s.materials.items() if isinstance(m, Water)]
+    if waters:
+        for name, mat in s.materials.items():
+            if isinstance(mat, Soil):
+                for key in ("porosity", "permeability"):
+                    if getattr(mat, key) is None:
+                        raise _Inconsistent(
+                            f"materials.{name}.{key}",
+                            "required when the scene has water (seepage force, seed eq. 18); the seed gives "
+                            "no value: choose one with a source (docs/seepage.md)",
+                        )
+    for k, block in enumerate(s.blocks):
+        key = f"blocks[{k}]"
+        if not block.saturated:
+            for extra in ("water_table", "pore_water"):
+                if getattr(block, extra) is not None:
+                    raise _Inconsistent(
+                        f"{key}.{extra}", "only for a saturated soil block (saturated = true)"
+                    )
+            continue
+        if not isinstance(s.materials.get(block.material), Soil):
+            raise _Inconsistent(f"{key}.saturated", "only soil blocks can be saturated")
+        if block.pore_water is None and len(waters) != 1:
+            reason = (
+                "needs a water material in the scene" if not waters else f"choose one of {', '.join(waters)}"
+            )
+            raise _Inconsistent(f"{key}.pore_water", f"a saturated block {reason}")
+        if block.pore_water is not None and block.pore_water not in waters:
+            raise _Inconsistent(f"{key}.pore_water", f"'{block.pore_water}' is not a water material")
+
+
+def estimated_dt(s: Scene):
+    """(dt, limit) before anything moves: seed eqs. (28)-(30) with the scene's sound speeds,
+    gravity as the force and the largest kinematic viscosity (the run's dt can only be smaller
+    once particles accelerate)."""
+    h = s.h
+    cfl = s.numerics.cfl
+    c = max(m.sound_speed for m in s.materials.values())
+    limits = [(cfl.sound * h / c, "sound speed")]
+    g = math.hypot(*s.scene.gravity)  # no overflow for huge components
+    if g > 0:
+        limits.append((cfl.force * math.sqrt(h / g), "gravity"))
+    nu = max((m.viscosity / m.density for m in s.materials.values() if isinstance(m, Water)), default=0.0)
+    if s.numerics.viscous_stress and nu > 0:
+        limits.append((cfl.viscous * h * h / nu, "viscosity"))
+    return min(limits)
+
+
+def _check_resources(s: Scene):
+    """Refuse scenes that no machine could run: too many particles, cells, steps (see the limits)."""
+    from .geometry import estimated_particles
+
+    n = estimated_particles(s)
+    if n > MAX_PARTICLES:
+        raise _Inconsistent(
+            "scene.spacing", f"the blocks would hold about {n:.3g} particles, more than {MAX_PARTICLES:.0e}"
+        )
+    extent = np.array(s.domain.max) - np.array(s.domain.min)
+    with np.errstate(over="ignore"):  # a far too large domain overflows to inf, which is refused
+        cells = float(np.prod(np.ceil(extent / (2.0 * s.h)) + 2.0))
+    if cells > MAX_CELLS:
+        raise _Inconsistent(
+            "domain",
+            f"spans {cells:.3g} neighbour cells of size 2h, more than {MAX_CELLS:.0e}: is it too large?",
+        )
+    dt, limit = estimated_dt(s)
+    steps = (s.scene.end_time + s.numerics.settling_time) / dt if dt > 0 else math.inf
+    if not steps <= MAX_STEPS:
+        raise _Inconsistent(
+            "scene.end_time",
+            f"needs about {steps:.3g} time steps (dt about {dt:.3g} s, set by the {limit}), more than "
+            f"{MAX_STEPS:.0e}",
+        )
 
 
 def deep_merge(base: dict, over: dict) -> dict:
@@ -310,19 +559,32 @@ def deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def _fill_material_defaults(raw: dict, defaults: dict) -> dict:
-    """Per-model defaults (viscosity, c factor, AV alpha/beta) filled in per material."""
-    raw = copy.deepcopy(raw)
-    av = raw.setdefault("numerics", {}).setdefault("artificial_viscosity", {})
-    for name, mat in (raw.get("materials") or {}).items():
-        if not isinstance(mat, dict):
+def _fill_material_defaults(merged: dict) -> dict:
+    """Per-model defaults (viscosity, c factor, AV alpha/beta) filled in per material, from
+    the merged [material_defaults.*] and [artificial_viscosity_defaults.*] tables (so a scene's
+    own values there are honoured). Anything of the wrong shape is left for the schema to refuse."""
+    merged = copy.deepcopy(merged)
+    materials = merged.get("materials")
+    numerics = merged.get("numerics")
+    if not isinstance(materials, dict):
+        return merged
+    av = numerics.setdefault("artificial_viscosity", {}) if isinstance(numerics, dict) else None
+    mat_defaults = merged.get("material_defaults")
+    av_defaults = merged.get("artificial_viscosity_defaults")
+    for name, mat in materials.items():
+        model = mat.get("model") if isinstance(mat, dict) else None
+        if not isinstance(model, str) or model not in MODELS:
             continue
-        model = mat.get("model")
-        for key, value in defaults.get("material_defaults", {}).get(model, {}).items():
-            mat.setdefault(key, value)
-        if model in defaults.get("artificial_viscosity_defaults", {}):
-            av.setdefault(name, dict(defaults["artificial_viscosity_defaults"][model]))
-    return raw
+        if isinstance(mat_defaults, dict) and isinstance(mat_defaults.get(model), dict):
+            for key, value in mat_defaults[model].items():
+                mat.setdefault(key, value)
+        if (
+            isinstance(av, dict)
+            and isinstance(av_defaults, dict)
+            and isinstance(av_defaults.get(model), dict)
+        ):
+            av.setdefault(name, dict(av_defaults[model]))
+    return merged
 
 
 _UNION_TAGS = {"water", "soil", "rectangle", "polygon"}
@@ -345,20 +607,56 @@ def _reason(err) -> str:
         return "unknown key (not in the scene schema)"
     if kind == "missing":
         return "missing value"
+    if kind == "value_error" and err.get("ctx", {}).get("error") is not None:
+        return str(err["ctx"]["error"])  # our own reason, without pydantic's "Value error, " prefix
     return err["msg"]
+
+
+def _refusal(exc: ValidationError, path, prefix=()) -> SceneError:
+    err = exc.errors()[0]
+    ctx_error = err.get("ctx", {}).get("error")
+    if isinstance(ctx_error, _Inconsistent):
+        return SceneError(path, ctx_error.key, str(ctx_error))
+    return SceneError(path, _dotted((*prefix, *err["loc"])), _reason(err))
 
 
 def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
-    merged = _fill_material_defaults(deep_merge(defaults, raw), defaults)
+    merged = deep_merge(defaults, raw)
+    _default_fields_for_the_phases(raw, merged)
+    for table in ("material_defaults", "artificial_viscosity_defaults"):
+        # checked before they are filled in, so an error names the key the user wrote
+        model = MaterialDefaults if table == "material_defaults" else Scene.model_fields[table].annotation
+        try:
+            if isinstance(merged.get(table), dict):
+                pydantic_validate(model, merged[table])
+        except ValidationError as exc:
+            raise _refusal(exc, path, (table,)) from None
     try:
-        return Scene.model_validate(merged)
+        return Scene.model_validate(_fill_material_defaults(merged))
     except ValidationError as exc:
-        err = exc.errors()[0]
-        ctx_error = err.get("ctx", {}).get("error")
-        if isinstance(ctx_error, _Inconsistent):
-            raise SceneError(path, ctx_error.key, str(ctx_error)) from None
-        raise SceneError(path, _dotted(err["loc"]), _reason(err)) from None
+        raise _refusal(exc, path) from None
+
+
+def _default_fields_for_the_phases(raw: dict, merged: dict):
+    """The default output fields include the water pressure; a scene without water that did not
+    choose its fields gets the defaults without it (choosing 'pressure' there is refused)."""
+    chose = isinstance(raw.get("output"), dict) and "fields" in raw["output"]
+    materials = merged.get("materials")
+    if chose or not isinstance(materials, dict) or not isinstance(merged.get("output"), dict):
+        return
+    if not any(isinstance(m, dict) and m.get("model") == "water" for m in materials.values()):
+        fields = merged["output"].get("fields")
+        if isinstance(fields, list):
+            merged["output"]["fields"] = [f for f in fields if f != "pressure"]
+
+
+def pydantic_validate(model, value):
+    if isinstance(model, type) and issubclass(model, BaseModel):
+        return model.model_validate(value)
+    from pydantic import TypeAdapter
+
+    return TypeAdapter(model, config=Strict.model_config).validate_python(value)
 
 
 def load_scene(path, overrides=()) -> Scene:
@@ -366,9 +664,19 @@ def load_scene(path, overrides=()) -> Scene:
     (value in TOML syntax, e.g. parallel.rebalance_every=50) applied before validation."""
     path = Path(path)
     if not path.is_file():
-        raise SceneError(path, "(file)", "no such scene file")
+        raise SceneError(
+            path, "(file)", f"no such scene file (shipped scenes: {', '.join(shipped_scenes())})"
+        )
     try:
-        raw = tomllib.loads(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise SceneError(path, "(file)", f"cannot be read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError(
+            path, "(file)", f"is not UTF-8 text (byte {exc.start}): is it a scene file?"
+        ) from None
+    try:
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(path, "(syntax)", str(exc)) from None
     for item in overrides:
@@ -387,6 +695,22 @@ def load_scene(path, overrides=()) -> Scene:
                 raise SceneError(path, key, "is not a table in the scene")
         table[last] = value
     return parse_scene(raw, path)
+
+
+def shipped_scenes() -> list[str]:
+    """Names of the scenes shipped with the package (`scoursph run NAME`)."""
+    return sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+
+
+def resolve_scene_path(arg) -> Path:
+    """A scene argument as a file: the path itself if it exists, else a shipped scene of that
+    name (`dam_break_2d` or `dam_break_2d.toml`); otherwise the path unchanged (load_scene
+    then says there is no such file)."""
+    path = Path(arg)
+    if path.exists() or path.parent != Path("."):
+        return path
+    shipped = SCENES_DIR / (path.name if path.suffix == ".toml" else f"{path.name}.toml")
+    return shipped if shipped.is_file() else path
 
 
 def scene_to_toml(scene: Scene) -> str:

@@ -27,9 +27,11 @@ class TimeStepper:
         self.fixed = min((c.constant_dt for c in constraints if c.constant_dt is not None), default=math.inf)
         self.fixed_name = next((c.name for c in constraints if c.constant_dt == self.fixed), None)
 
-    def __call__(self, max_acc: float):
-        """(dt, name of the limiting constraint)."""
+    def __call__(self, max_acc: float, dynamic=()):
+        """(dt, name of the limiting constraint); `dynamic`: (name, dt) of state-dependent limits."""
         dt_force = self.cfl_force * math.sqrt(self.h / max_acc) if max_acc > 0 else math.inf
-        if dt_force < self.fixed:
-            return dt_force, "force"
-        return self.fixed, self.fixed_name
+        dt, name = (dt_force, "force") if dt_force < self.fixed else (self.fixed, self.fixed_name)
+        for other, value in dynamic:
+            if value < dt:
+                dt, name = value, other
+        return dt, name

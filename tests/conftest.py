@@ -30,3 +30,19 @@ def write_scene(tmp_path, text, name="scene.toml"):
 
 SCOURSPH = [sys.executable, "-m", "scoursph"]
 ENV = {**os.environ, "NUMBA_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+
+
+NIGHTLY = os.environ.get("SCOURSPH_NIGHTLY") == "1"
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked `nightly` (the full fuzzer, the whole stability matrix, long studies) run with
+    SCOURSPH_NIGHTLY=1 or `pytest -m nightly`; `make test` skips them and says why."""
+    if NIGHTLY or "nightly" in (config.option.markexpr or ""):
+        return
+    skip = pytest.mark.skip(
+        reason="nightly: the full set runs with SCOURSPH_NIGHTLY=1 (or pytest -m nightly)"
+    )
+    for item in items:
+        if "nightly" in item.keywords:
+            item.add_marker(skip)

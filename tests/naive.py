@@ -85,3 +85,46 @@ def fluid_rates(
                 acc[i] -= mass[j] * (-alpha * c * phi + beta * phi**2) / (0.5 * (rho[i] + rho[j])) * gw
             xsph[i] -= xsph_eps * mass[j] / rho[j] * vij * cubic_spline(np.linalg.norm(xij), h, dim)
     return drho, acc, xsph
+
+
+def continuity(targets, x, v, mass, h, dim, nbr_lists):
+    """Seed eq. (6) alone: drho_i = sum_j m_j (v_i - v_j) . grad_i W_ij."""
+    drho = np.zeros(len(x))
+    for t, i in enumerate(targets):
+        for j in nbr_lists[t]:
+            drho[i] += mass[j] * (v[i] - v[j]) @ grad_w(x[i], x[j], h, dim)
+    return drho
+
+
+def fluid_rates_mixed(targets, x, v, rho, p, mass, material, c, alpha, beta, h, dim, nbr_lists):
+    """Eqs. (6), (7) and (19) when a phase holds several materials: the artificial viscosity of
+    a pair uses the pair means of c, alpha and beta (Monaghan 1992: c_bar = (c_i + c_j) / 2; the
+    same mean for alpha, beta, which makes the pair term symmetric); c, alpha, beta per material."""
+    drho = np.zeros(len(x))
+    acc = np.zeros((len(x), dim))
+    for t, i in enumerate(targets):
+        for j in nbr_lists[t]:
+            mi, mj = material[i], material[j]
+            gw = grad_w(x[i], x[j], h, dim)
+            vij, xij = v[i] - v[j], x[i] - x[j]
+            drho[i] += mass[j] * vij @ gw
+            acc[i] -= mass[j] * (p[i] / rho[i] ** 2 + p[j] / rho[j] ** 2) * gw
+            vr = vij @ xij
+            if vr < 0:
+                c_bar, a_bar, b_bar = (
+                    (c[mi] + c[mj]) / 2,
+                    (alpha[mi] + alpha[mj]) / 2,
+                    (beta[mi] + beta[mj]) / 2,
+                )
+                phi = h * vr / (xij @ xij + 0.01 * h * h)
+                acc[i] -= mass[j] * (-a_bar * c_bar * phi + b_bar * phi**2) / (0.5 * (rho[i] + rho[j])) * gw
+    return drho, acc
+
+
+def hydrostatic_image_pressure(first, src, x, rho, gravity, p):
+    """numerics.image_pressure = "hydrostatic": an image's pressure is its source's plus the
+    hydrostatic difference between them, p' = p_src + rho_src g . (x' - x_src); sources unchanged."""
+    out = np.array(p, dtype=float, copy=True)
+    for k, j in enumerate(src):
+        out[first + k] = p[first + k] + rho[j] * np.dot(gravity, x[first + k] - x[j])
+    return out

@@ -100,3 +100,48 @@ def artificial_stress(p, s6, rho, eps, dim=2):
         R[:2, :2] += -eps * max(w[a], 0) / rho**2 * np.outer(vec[:, a], vec[:, a])
     R[2, 2] = -eps * max(sig[2, 2], 0) / rho**2
     return to_voigt(R)
+
+
+def frictional_images(
+    first, src, offset, fric_axis, fric_side, mu, p, s6, vsign, x, v, rho, gravity, v_stick
+):
+    """Coulomb wall by images (module doc of solver/physics/boundary.py), from the definitions,
+    with full 3x3 stresses. For an image k across one frictional wall (normal axis a, side +1
+    lower / -1 upper, plane at offset/2): the source's compressive normal stress on the wall
+    plane, sigma_n = -(e_a . sigma . e_a) + rho |g_a| d (static equilibrium over the distance d
+    to the plane), at least 0; its shear traction on the plane, tau_b = sigma_ab (b != a);
+    its tangential velocity u. Stick (|u| <= v_stick and |tau| <= mu sigma_n): no-slip image
+    (vsign -1 along the plane), stress unchanged. Slip: free-slip image (vsign +1) and image
+    shear sigma'_ab = 2 w_b - sigma_ab, so that the pair's mean (the wall's traction) is w, of
+    size mu sigma_n: against the sliding velocity, w = side mu sigma_n u / |u| (the traction
+    sigma . n on the soil, n = -side e_a its outward normal, then opposes u), or along tau when
+    slip starts from rest. Returns (new vsign, new stress rows, number slipping)."""
+    dim = x.shape[1]
+    vsign, s6 = vsign.copy(), s6.copy()
+    slipping = 0
+    for k, j in enumerate(src):
+        a = fric_axis[k]
+        if a < 0:
+            continue
+        i = first + k
+        sigma = -p[j] * np.eye(3) + to_matrix(s6[j])
+        plane = 0.5 * offset[k, a]
+        sigma_n = max(-sigma[a, a] + rho[j] * abs(gravity[a]) * abs(x[j, a] - plane), 0.0)
+        tangential = [b for b in range(3) if b != a]
+        tau = np.array([sigma[a, b] for b in tangential])
+        u = np.array([v[j, b] if b < dim else 0.0 for b in tangential])
+        limit = mu * sigma_n
+        sliding = np.linalg.norm(u) > v_stick
+        slip = sliding or np.linalg.norm(tau) > limit
+        for b in tangential:
+            if b < dim:
+                vsign[k, b] = 1.0 if slip else -1.0
+        if slip:
+            slipping += 1
+            w = fric_side[k] * limit * u / np.linalg.norm(u) if sliding else limit * tau / np.linalg.norm(tau)
+            image = to_matrix(s6[i])
+            for wb, b in zip(w, tangential):
+                if b < dim:
+                    image[a, b] = image[b, a] = 2.0 * wb - sigma[a, b]
+            s6[i] = to_voigt(image)
+    return vsign, s6, slipping

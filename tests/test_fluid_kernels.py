@@ -8,7 +8,9 @@ from conftest import disordered_lattice
 
 from solver.kernels import cubic_spline_normalisation
 from solver.neighbors import CellGrid, CellList
-from solver.physics import fluid
+from solver.physics.fluid_rates import fluid_rates
+from solver.physics.tait_eos import tait_pressure
+from solver.physics.viscous_stress import viscous_stress
 
 
 def setup(rng, dim=2, n_side=14):
@@ -34,7 +36,7 @@ def setup(rng, dim=2, n_side=14):
 def test_tait_eos(rng):
     rho = 1000 * (1 + rng.uniform(-0.02, 0.02, 50))
     p = np.zeros(50)
-    fluid.tait_pressure(
+    tait_pressure(
         50, rho, np.zeros(50, np.int32), np.array([1000.0]), np.array([32142.857]), np.array([7.0]), p
     )
     np.testing.assert_allclose(p, naive.tait(rho, 1000.0, 32142.857, 7.0), rtol=1e-12)
@@ -52,7 +54,7 @@ def test_viscous_stress_matches_twin(rng, dim):
     n = len(s["x"])
     tau = np.zeros((n, 6))
     norm = cubic_spline_normalisation(dim, s["h"])
-    fluid.viscous_stress(
+    viscous_stress(
         s["targets"],
         s["nl"].start,
         s["nl"].index,
@@ -90,7 +92,7 @@ def test_fluid_rates_match_twin(rng, dim, terms):
     drho, acc, xsph = np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim))
     c = np.array([15.0])
     norm = cubic_spline_normalisation(dim, s["h"])
-    fluid.fluid_rates(
+    fluid_rates(
         s["targets"],
         s["nl"].start,
         s["nl"].index,
@@ -142,7 +144,7 @@ def test_pair_forces_conserve_linear_momentum(rng):
     tau = rng.normal(0, 1e-2, (n, 6))
     tau[:, 4:] = 0
     drho, acc, xsph = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2))
-    fluid.fluid_rates(
+    fluid_rates(
         s["targets"],
         s["nl"].start,
         s["nl"].index,

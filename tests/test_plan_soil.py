@@ -2,8 +2,11 @@
 
 import numpy as np
 
+from solver.materials import Phase
+from solver.particles import Mirror
 from solver.plan import build_plan
 from solver.simulation import Simulation
+from solver.term import Integrated
 from verification.column_collapse import scene_at
 
 WATER_FIELDS = ("p", "tau", "xsph")
@@ -15,13 +18,21 @@ def small_collapse(**kw):
 
 def test_soil_only_plan_has_no_water_term_or_field():
     plan = build_plan(small_collapse())
-    assert [p.name for p in plan.passes] == ["soil_stress", "soil_rates"]
-    assert all(p.targets == "soil" and p.neighbours == "soil" for p in plan.passes)
+    assert [t.name for t in plan.terms] == [
+        "wall images",
+        "soil stress state",
+        "artificial stress",
+        "gravity",
+        "soil rates",
+        "soil return mapping",
+    ]
+    assert plan.pairs == ((Phase.SOIL, Phase.SOIL),)
     assert not any(f in plan.fields for f in WATER_FIELDS)
-    assert not any("seepage" in t.name for p in plan.passes for t in p.terms)
+    assert not any("seepage" in t.name for t in plan.terms)
     assert [c.name for c in plan.constraints] == ["force", "soil sound"]  # no water sound, no viscous limit
-    assert ("stress_dev", "stress_dev_half", "dstress") in plan.integrated
-    assert plan.image_tensors == ("stress_dev", "art_stress")
+    assert Integrated("stress_dev", "stress_dev_half", "dstress") in plan.integrated
+    tensors = [n for n in plan.halo_fields if plan.fields[n].mirror is Mirror.TENSOR]
+    assert tensors == ["stress_dev", "art_stress"]
     sim = Simulation(small_collapse())
     assert not any(f in sim.particles for f in WATER_FIELDS)
 
@@ -31,15 +42,16 @@ def test_equilibrium_image_stress_option_is_planned_for_soil_only_and_explained(
 
     scene = small_collapse(overrides={"numerics": {"image_pressure": "hydrostatic"}})
     on = build_plan(scene)
-    assert on.options["equilibrium_soil_images"] and not on.options["hydrostatic_images"]  # no water here
-    assert not build_plan(small_collapse()).options["equilibrium_soil_images"]
-    assert "soil image stress: source stress + static increment" in explain(on, scene)
+    assert on.has_term("equilibrium soil image stress")
+    assert not on.has_term("hydrostatic image pressure")  # no water here
+    assert not build_plan(small_collapse()).has_term("equilibrium soil image stress")
+    assert "sigma_image = sigma_source - q g^ g^" in explain(on, scene)
 
 
 def test_artificial_stress_off_removes_field_and_term():
     plan = build_plan(small_collapse(overrides={"numerics": {"artificial_stress": 0.0}}))
-    assert "art_stress" not in plan.fields and plan.image_tensors == ("stress_dev",)
-    assert not any("artificial stress" in t.name for p in plan.passes for t in p.terms)
+    assert "art_stress" not in plan.fields and "art_stress" not in plan.halo_fields
+    assert not any("artificial stress" in name for name, _ in plan.equations())
 
 
 def test_soil_sound_speed_constraint_from_k_and_g():
@@ -62,7 +74,7 @@ def test_stress_images_mirror_by_eq23():
         sim.step()
     sim.compute_rates()  # images refreshed from the current sources
     ps = sim.particles
-    src, sign, _ = sim.walls.tables()
+    src, sign, _ = sim.ctx.image_tables()
     first = ps.n_local
     s = ps["stress_dev"]
     assert len(src) > 0 and np.abs(s[src, 3]).max() > 0

@@ -1,6 +1,7 @@
 """A run end to end through the CLI: HDF5 series, VTK series, PNG, merged scene, blow-up report."""
 
 import json
+import re
 import subprocess
 import tomllib
 import xml.etree.ElementTree as ET
@@ -16,11 +17,19 @@ from solver.scene import parse_scene
 DAM = (ROOT / "scenes" / "dam_break_2d.toml").read_text()
 
 
+def set_key(text, key, value):
+    """The scene text with `key = ...` set to value; fails if the key is not there exactly once
+    (a silent no-op edit would leave the test checking the wrong scene)."""
+    pattern = re.compile(rf"^{key} = [^\n#]*", re.M)
+    text, n = pattern.subn(f"{key} = {value}", text)
+    assert n == 1, f"{key} appears {n} times"
+    return text
+
+
 def tiny_dam_break(tmp_path, extra=""):
-    text = DAM.replace("spacing = 0.00142875", "spacing = 0.005715").replace(
-        "end_time = 0.33", "end_time = 0.03"
-    )
-    text = text.replace("interval = 0.01", "interval = 0.01") + extra
+    text = set_key(set_key(DAM, "spacing", "0.005715"), "end_time", "0.03")
+    # the snapshot times the tests below expect (0, 0.01, 0.02, 0.03), whatever the shipped scene says
+    text = set_key(text, "interval", "0.01") + extra
     path = tmp_path / "tiny.toml"
     path.write_text(text)
     return path
@@ -106,7 +115,7 @@ def test_crash_during_a_snapshot_keeps_the_earlier_ones(tmp_path, monkeypatch):
 def test_blow_up_stops_with_what_where_when_and_keeps_outputs(tmp_path):
     extra = "\n[numerics.cfl]\nsound = 3.0\nforce = 3.0\n"
     scene = tiny_dam_break(tmp_path, extra)
-    text = scene.read_text().replace("interval = 0.01", "times = [0.0, 0.03]")
+    text = set_key(scene.read_text(), "interval", "0.01").replace("interval = 0.01", "times = [0.0, 0.03]")
     scene.write_text(text)
     out = tmp_path / "out"
     proc = subprocess.run(

@@ -1,4 +1,5 @@
-"""Soil kernels (solver/physics/soil.py) against hand-computed cases and NumPy twins."""
+"""Soil kernels (solver/physics/soil_*.py, artificial_stress.py) against hand-computed cases and
+NumPy twins."""
 
 import naive_soil as nv
 import numpy as np
@@ -6,11 +7,14 @@ import pytest
 from conftest import disordered_lattice
 
 from solver.kernels import cubic_spline_normalisation, cubic_spline_w
+from solver.materials import YieldModel
 from solver.neighbors import CellGrid, CellList
-from solver.physics import soil
+from solver.physics.artificial_stress import artificial_stress
+from solver.physics.soil_rates import jaumann, soil_rates
+from solver.physics.soil_stress import return_map, soil_stress_state
 
 K, G = 7.0e5, 3.2e5
-DP, MC = soil.YIELD_DRUCKER_PRAGER, soil.YIELD_MOHR_COULOMB
+DP, MC = int(YieldModel.DRUCKER_PRAGER), int(YieldModel.MOHR_COULOMB)
 
 
 def params(phi, c, psi=0.0):
@@ -27,7 +31,7 @@ def params(phi, c, psi=0.0):
 
 
 def fast_map(p, s6, model, phi, c, psi=0.0):
-    out = soil.return_map(p, *s6, model, *params(phi, c, psi))
+    out = return_map(p, *s6, model, *params(phi, c, psi))
     return out[0], np.array(out[1:7]), out[7]
 
 
@@ -114,7 +118,7 @@ def test_jaumann_matches_seed_eq13_index_form(rng):
         s6 = rng.normal(size=6)
         L = rng.normal(size=(3, 3))
         W = 0.5 * (L - L.T)
-        fast = np.array(soil.jaumann(*s6, W[0, 1], W[0, 2], W[1, 2]))
+        fast = np.array(jaumann(*s6, W[0, 1], W[0, 2], W[1, 2]))
         np.testing.assert_allclose(fast, nv.jaumann(s6, L), rtol=1e-12, atol=1e-14)
 
 
@@ -126,7 +130,7 @@ def test_jaumann_update_is_objective_under_rigid_rotation():
     s0 = np.array([3.0, -1.0, -2.0, 0.7, 0.0, 0.0])
     omega = 2.0  # rad/s about z: v = omega (-y, x)
     W = np.array([[0, -omega, 0], [omega, 0, 0], [0, 0, 0.0]])
-    rate = lambda s: np.array(soil.jaumann(*s, W[0, 1], W[0, 2], W[1, 2]))
+    rate = lambda s: np.array(jaumann(*s, W[0, 1], W[0, 2], W[1, 2]))
     T, n = 0.6, 600
     dt = T / n
     s = s0.copy()
@@ -177,7 +181,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
     norm = cubic_spline_normalisation(dim, h)
     w_dx = cubic_spline_w(dx, h, norm)
     drho, acc, ds = np.zeros(n), np.zeros((n, dim)), np.zeros((n, 6))
-    soil.soil_rates(
+    soil_rates(
         nl.targets,
         nl.start,
         nl.index,
@@ -220,7 +224,7 @@ def test_soil_stress_state_and_artificial_stress_match_twins(rng):
     mat = np.zeros(n, dtype=np.int32)
     pr = params(25.0, 20.0)
     mean = np.zeros(n)
-    soil.soil_stress_state(
+    soil_stress_state(
         rows,
         rho,
         s,
@@ -238,7 +242,7 @@ def test_soil_stress_state_and_artificial_stress_match_twins(rng):
         np.testing.assert_allclose(s[i], sn, rtol=1e-10, atol=1e-8)
     art = np.zeros((n, 6))
     p = rng.uniform(-2000, 2000, n)
-    soil.artificial_stress(rows, rho, p, s0, 0.5, art)
+    artificial_stress(rows, rho, p, s0, 0.5, art)
     for i in range(n):
         np.testing.assert_allclose(
             art[i], nv.artificial_stress(p[i], s0[i], rho[i], 0.5), rtol=1e-9, atol=1e-16
@@ -260,7 +264,7 @@ def test_artificial_stress_in_3d_matches_twin(rng):
     s[:3], p[:3] = 0.0, [-700.0, 0.0, 300.0]  # isotropic tension, zero, isotropic compression
     s[3], p[3] = [200.0, -100.0, -100.0, 0, 0, 0], 0.0  # axisymmetric: two equal principal stresses
     art = np.zeros((n, 6))
-    soil.artificial_stress(rows, rho, p, s, 0.5, art, True)
+    artificial_stress(rows, rho, p, s, 0.5, art, True)
     for i in range(n):
         np.testing.assert_allclose(
             art[i],
@@ -305,7 +309,7 @@ def test_single_shear_elastic_then_plastic_plateau():
     history = []
     for k in range(int(3 * gamma_elastic_end / (rate * dt))):
         S = np.tile(s, (n, 1))
-        soil.soil_rates(
+        soil_rates(
             nl.targets,
             nl.start,
             nl.index,
@@ -325,7 +329,7 @@ def test_single_shear_elastic_then_plastic_plateau():
             ds_rows,
         )
         s = s + dt * ds_rows[centre]
-        out = soil.return_map(p, *s, DP, *pr)
+        out = return_map(p, *s, DP, *pr)
         s = np.array(out[1:7])
         history.append(((k + 1) * dt * rate, s.copy()))
     gam = np.array([hh[0] for hh in history])

@@ -1,10 +1,24 @@
 """Hard soil cases stay stable (CI size): no NaN (the run raises BlowUpError on one), no
-particle through a wall, kinetic energy decaying to rest, stress within the yield surface."""
+particle through a wall, kinetic energy decaying to rest, stress within the yield surface.
+
+Where each bound comes from (issue 13):
+  * at rest: no particle moves more than dx/2 over the run (dx/2: the positional resolution of
+    the particle set; a lattice site is dx away), and its energy form, the final kinetic
+    energy at most KE_rest = M (dx / 2 / T)^2 / 2, the whole mass M moving at the speed that
+    carries a particle dx/2 in the run's duration T (_ke_at_rest);
+  * nothing through a wall: a wall crossing deeper than dx/2 puts a particle where the first
+    image layer was (the lattice starts dx/2 from the wall, its image dx/2 beyond), i.e. the
+    image repulsion failed (the run itself stops at h, README "Exit status");
+  * yield surface: the return mapping puts the stress on the surface up to rounding; the
+    excess is relative to the stress scale (yield_excess), so a few ulp (1e-15) are expected
+    and 1e-9 allows 1e6 ulp of accumulated rounding while any real overshoot is O(1e-3) or more.
+"""
 
 import numpy as np
 import pytest
 
-from solver.physics.soil import yield_excess
+from solver.materials import Phase
+from solver.physics.soil_stress import yield_excess
 from solver.simulation import Simulation
 from verification.column_collapse import run, scene_at
 
@@ -17,7 +31,14 @@ def _scene(blocks, end_time, dx=0.01, domain=(0.5, 0.3)):
     )
 
 
-def _run_and_check(sim, t_end, ke_ratio, v0=None):
+def _ke_at_rest(sim, duration):
+    """KE_rest = M (dx / 2 / T)^2 / 2 (module doc): above it the body is not at rest on the
+    scale the particles resolve."""
+    n = sim.particles.n_owned
+    return 0.5 * float(np.sum(sim.particles["mass"][:n])) * (0.5 * sim.scene.scene.spacing / duration) ** 2
+
+
+def _run_and_check(sim, t_end, v0=None):
     ps = sim.particles
     if v0 is not None:
         ps["v"][: ps.n_owned] = v0
@@ -32,8 +53,12 @@ def _run_and_check(sim, t_end, ke_ratio, v0=None):
     assert np.isfinite(x).all() and np.isfinite(ps["stress_dev"][:n]).all()
     assert (x >= sim.lo).all() and (x <= sim.hi).all()  # nothing through a wall
     assert sim.deepest_penetration < 0.5 * sim.scene.scene.spacing  # reflections (if any) stayed shallow
-    assert ke[-1] <= ke_ratio * max(ke), (ke[-1], max(ke))  # decays to rest
-    rows = sim.lists[("soil", "soil")].targets
+    assert ke[-1] <= _ke_at_rest(sim, t_end), (
+        ke[-1],
+        _ke_at_rest(sim, t_end),
+        max(ke),
+    )  # at rest (module doc)
+    rows = sim.ctx.rows[Phase.SOIL]
     assert (
         yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil).max()
         <= 1e-9
@@ -60,9 +85,12 @@ def test_tall_column_aspect_2_collapses_and_stops():
             dx=0.005,
         )
     )
-    _run_and_check(sim, 1.5, ke_ratio=0.02)
+    _run_and_check(sim, 1.5)
     x = sim.particles.owned("x")
-    assert x[:, 0].max() > 0.1  # it did collapse (spread beyond twice its width)
+    # it did collapse: a standing column reaches x = 0.05 m; a heap at the angle of repose
+    # phi = 19.8 deg against the wall with the column's area A = 0.005 m^2 runs out to
+    # sqrt(2 A / tan phi) = 0.167 m; 0.1 m lies between the two
+    assert x[:, 0].max() > 0.1
 
 
 def test_block_dropped_at_2_m_per_s_onto_the_floor():
@@ -73,7 +101,7 @@ def test_block_dropped_at_2_m_per_s_onto_the_floor():
             dx=0.005,
         )
     )
-    _run_and_check(sim, 0.6, ke_ratio=0.02, v0=np.array([0.0, -2.0]))
+    _run_and_check(sim, 0.6, v0=np.array([0.0, -2.0]))
     assert sim.particles.owned("x")[:, 1].min() > 0.0
 
 
@@ -98,14 +126,14 @@ def test_settled_heap_stays_at_rest_for_10_collapse_times():
     sim = Simulation(_scene([heap], 3.0, dx=0.01))
     x0 = sim.particles.owned("x").copy()
     ids0 = sim.particles.owned("id").copy()
-    _run_and_check(sim, 3.0, ke_ratio=1.0)
+    _run_and_check(sim, 3.0)
     ps = sim.particles
     order = np.argsort(ps.owned("id"))
     moved = np.linalg.norm(ps.owned("x")[order] - x0[np.argsort(ids0)], axis=1)
     # at rest: no particle moved more than half a spacing in 3 s (creep would accumulate beyond it)
     assert moved.max() < 0.5 * 0.01, moved.max()
     v = ps.owned("v_half")
-    assert np.abs(v).max() < 1e-2
+    assert np.abs(v).max() < 0.5 * 0.01 / 3.0  # at rest: no faster than dx/2 over the run (module doc)
 
 
 def _deposit_stays_at_rest(dx):
@@ -131,7 +159,7 @@ def _deposit_stays_at_rest(dx):
     t_c = float(samples[np.flatnonzero(after_peak & (ke < 0.01 * peak))[0]])
     n = ps.n_owned
     x1 = ps["x"][:n][np.argsort(ps["id"][:n])].copy()
-    long_ke = _run_and_check(_Offset(sim, sim.t), 10 * t_c, ke_ratio=1.0)
+    long_ke = _run_and_check(_Offset(sim, sim.t), 10 * t_c)
     third = len(long_ke) // 3
     assert np.mean(long_ke[-third:]) <= np.mean(long_ke[:third]), long_ke
     assert max(long_ke) < 0.01 * peak, (max(long_ke), peak)
@@ -179,8 +207,10 @@ def test_settling_phase_drains_the_start_transient():
     # releases with the elastic transient of its own weight (kinetic energy ~1e-7 J/m at
     # 0.05 s); after 0.3 s of settling (~10 periods of the layer's lowest mode, 4 H / c_s ~
     # 0.02 s) the released layer is at rest to round-off. Bound: 1e-6 of the undamped start's
-    # kinetic energy (six orders: the kinetic-damping resets remove energy geometrically, and
-    # 1e-6 leaves many orders of margin above the measured ~1e-20 ratio without depending on it).
+    # kinetic energy, a discrimination threshold with both sides stated: without settling the
+    # ratio is 1 by definition, with it ~1e-20 is measured (kinetic-damping resets remove the
+    # transient's energy geometrically), so a damping that works is far below 1e-6 and one
+    # that does not is at 1.
     def layer(settle):
         blk = {"name": "layer", "material": "bars", "shape": "rectangle", "min": [0, 0], "max": [0.3, 0.05]}
         sim = Simulation(
@@ -195,7 +225,7 @@ def test_settling_phase_drains_the_start_transient():
                 },
             )
         )
-        return sim, _run_and_check(sim, 0.2, ke_ratio=1.0)
+        return sim, _run_and_check(sim, 0.2)
 
     plain, ke_plain = layer(0.0)
     settled, ke_settled = layer(0.3)
@@ -210,4 +240,7 @@ def test_column_collapse_ci_size_comes_to_rest_inside_yield_surface():
         by_name["kinetic energy final / peak"].value < 0.05
     )  # at dx = 1 cm detached grains may still roll at 1 s
     assert by_name["max yield excess f/scale"].passed
-    assert 0.3 < res.series["runout"] < 0.6  # a collapse happened, and stayed within the tank
+    # a collapse happened and stayed in the tank: from the 5 mm runout error (-11 % of 0.442 m)
+    # and the study's observed order 1.27 (README), the 1 cm runout is about
+    # 0.442 (1 - 0.11 * 2^1.27) = 0.325 m; 0.3 allows that, 0.6 m is the tank's end wall
+    assert 0.3 < res.series["runout"] < 0.6

@@ -55,10 +55,12 @@ import numpy as np
 from .common import (
     GCI_SAFETY,
     RESULTS,
+    SCENES,
     CaseResult,
     Check,
     load_1min,
     machine_load,
+    reference_case_dir,
     report,
     richardson,
     save_figure,
@@ -67,12 +69,11 @@ from .common import (
     write_csv,
 )
 
-ROOT = Path(__file__).resolve().parent.parent
-SCENE = ROOT / "scenes" / "column_collapse_2d.toml"
+SCENE = SCENES / "column_collapse_2d.toml"
 DATA = (
     Path(os.environ.get("SCOURSPH_REFERENCE_DATA", Path(__file__).with_name("data"))) / "bui2008_profile.csv"
 )
-LIGGGHTS = ROOT / "reference_cases" / "liggghts_column_collapse_2d" / "data"
+LIGGGHTS = reference_case_dir("liggghts_column_collapse_2d") / "data"
 SOURCE = (
     "Bui, Fukagawa, Sako & Ohno (2008), Int. J. Numer. Anal. Meth. Geomech. 32:1537-1570, "
     "aluminium-bar collapse; digitised data bui2008_profile.csv"
@@ -171,7 +172,8 @@ def failure_at(series, yq):
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=None):
     """Collapse at dx = H0 / resolution; returns a CaseResult (series: final profile and
     failure line, kinetic energy over time; checks against the experiment)."""
-    from solver.physics.soil import yield_excess
+    from solver.materials import Phase
+    from solver.physics.soil_stress import yield_excess
 
     dx = spacing(resolution)
     scene = scene_at(dx, end_time, overrides)
@@ -192,7 +194,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     ps = sim.particles
     n = ps.n_owned
     x = ps["x"][:n][np.argsort(ps["id"][:n])]
-    rows = sim.lists[("soil", "soil")].targets
+    rows = sim.ctx.rows[Phase.SOIL]
     excess = yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil)
     px, py = surface_profile(x, dx)
     fx, fy = failure_line(x0, x, dx, threshold=max(dx, FAILURE_THRESHOLD))

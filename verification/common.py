@@ -4,6 +4,7 @@ reference data, and the resolution-study table (error and wall time side by side
 from __future__ import annotations
 
 import csv
+import math
 import os
 import time
 import tomllib
@@ -13,12 +14,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from solver.scene import parse_scene
+from solver.scene import SCENES_DIR, parse_scene
 from solver.simulation import Simulation
 
+# Package data: every path is found from a module's own location, so an installed package
+# (a wheel, not the repository) finds the same files (pyproject.toml [tool.setuptools.package-data]).
 DATA = Path(__file__).with_name("data")
-SCENES = Path(__file__).resolve().parent.parent / "scenes"
+SCENES = SCENES_DIR
 RESULTS = Path(__file__).with_name("results")
+
+
+def reference_case_dir(name):
+    """reference_cases/<name> (its manifest.json and data/), shipped with the package."""
+    import reference_cases
+
+    return Path(reference_cases.__file__).resolve().parent / name
 
 
 @dataclass
@@ -243,12 +253,29 @@ def case_main(module, argv=None):
 
     argv = sys.argv[1:] if argv is None else argv
     if "--study" in argv:
-        for row in module.study():
+        rows = module.study()
+        for row in rows:
             print(row)
-        return 0
+        failures = study_failures(rows)
+        for failure in failures:
+            print("  FAIL:", failure)
+        return 1 if failures else 0
     return report(
         module.run(int(argv[0]) if argv else module.DEFAULT_RESOLUTION, out_dir="runs/verification")
     )
+
+
+def study_failures(rows):
+    """What is wrong with a resolution study's rows: none at all, or a non-finite number
+    (an error or a wall time that is NaN or inf means a run that did not produce a result)."""
+    if not rows:
+        return ["the study produced no rows"]
+    out = []
+    for row in rows:
+        for key, value in row.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isfinite(value):
+                out.append(f"resolution {row.get('resolution', '?')}: {key} = {value}")
+    return out
 
 
 def report(res):

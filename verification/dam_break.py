@@ -20,6 +20,7 @@ error from the resolution study in verification/results/dam_break_study.csv.
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,7 @@ from .common import (
     case_main,
     load_1min,
     read_csv,
+    reference_case_dir,
     rms,
     save_figure,
     save_study,
@@ -48,7 +50,8 @@ TAU_SCALE = np.sqrt(G / A)  # tau = t sqrt(g/a)
 T_END = 6.0
 DEFAULT_RESOLUTION = 20  # particles across a (CI size: 800 particles)
 STUDY_RESOLUTIONS = (20, 40, 80)
-OPENFOAM = Path(__file__).resolve().parent.parent / "reference_cases" / "openfoam_dam_break_2d" / "data"
+OPENFOAM_CASE = reference_case_dir("openfoam_dam_break_2d")
+OPENFOAM = OPENFOAM_CASE / "data"
 STUDY_FILE = RESULTS / "dam_break_study.csv"
 
 
@@ -103,12 +106,25 @@ def experimental_scatter():
 
 
 def openfoam_series():
-    """{cells per a: (T, Z, H/H0)} of the OpenFOAM reference runs that exist."""
+    """{cells per a: (T, Z, H/H0)} of every serial OpenFOAM reference run its manifest lists.
+    A missing manifest or data file is an error (FileNotFoundError), never a silently
+    dropped check: the checks against OpenFOAM depend on these files."""
+    manifest = OPENFOAM_CASE / "manifest.json"
+    if not manifest.is_file():
+        raise FileNotFoundError(f"OpenFOAM reference manifest missing: {manifest}")
+    runs = json.loads(manifest.read_text())["runs"]
+    expected = {
+        int(r["cells_per_a"]): OPENFOAM / Path(r["output_csv"]).name for r in runs.values() if r["ranks"] == 1
+    }
+    missing = [str(p) for p in expected.values() if not p.is_file()]
+    if not expected or missing:
+        raise FileNotFoundError(
+            f"OpenFOAM reference data missing (listed in {manifest}): {', '.join(missing) or 'no runs'}; "
+            "regenerate with `make references` or reinstall the package"
+        )
     out = {}
-    for path in sorted(OPENFOAM.glob("openfoam_dx*.csv")):
-        tag = path.stem.split("_dx")[1]
-        if not tag.isdigit():
-            continue  # 2-rank and other variants
+    for cells, path in sorted(expected.items()):
+        tag = str(cells)
         with open(path) as fh:
             rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
         t = np.array([float(r["t_s"]) for r in rows])
@@ -195,37 +211,36 @@ def checks(res):
         f"{rms(np.interp(Te, T, Z) - Ze):.3g}; "
         f"best-fit time offset of this SPH run: dT = {time_offset(T, Z, Te, Ze):.3g}"
     ]
-    if foam:
-        fine = max(foam)
-        Tf, Zf, Hf = foam[fine]
-        dT = time_offset(Tf, Zf, Te, Ze)
-        res.notes.append(f"time offset of OpenFOAM a/{fine} vs Martin & Moyce: dT = {dT:.3g} (applied below)")
-        out.append(
-            Check(
-                f"front vs Martin & Moyce 2.25 in, origin shifted by OpenFOAM's dT = {dT:.2f}, RMS of Z "
-                "error",
-                rms(np.interp(Te - dT, T, Z) - Ze),
-                scatter + z_disc,
-                f"experimental scatter {scatter:.3g} between column sizes" + note(z_disc),
-            )
+    # openfoam_series() raises when the data are missing: these checks never vanish
+    fine = max(foam)
+    Tf, Zf, Hf = foam[fine]
+    dT = time_offset(Tf, Zf, Te, Ze)
+    res.notes.append(f"time offset of OpenFOAM a/{fine} vs Martin & Moyce: dT = {dT:.3g} (applied below)")
+    out.append(
+        Check(
+            f"front vs Martin & Moyce 2.25 in, origin shifted by OpenFOAM's dT = {dT:.2f}, RMS of Z error",
+            rms(np.interp(Te - dT, T, Z) - Ze),
+            scatter + z_disc,
+            f"experimental scatter {scatter:.3g} between column sizes" + note(z_disc),
         )
-        taue, He = experiment_height()
-        dtau = time_offset(
-            Tf / np.sqrt(2.0), Hf, taue[taue <= Tf.max() / np.sqrt(2.0)], He[taue <= Tf.max() / np.sqrt(2.0)]
+    )
+    taue, He = experiment_height()
+    dtau = time_offset(
+        Tf / np.sqrt(2.0), Hf, taue[taue <= Tf.max() / np.sqrt(2.0)], He[taue <= Tf.max() / np.sqrt(2.0)]
+    )
+    res.notes.append(
+        f"time offset of OpenFOAM a/{fine} height vs Martin & Moyce: dtau = {dtau:.3g} (applied below)"
+    )
+    keep = (taue - dtau >= 0) & (taue - dtau <= tau.max())
+    out.append(
+        Check(
+            f"wall height vs Martin & Moyce, origin shifted by OpenFOAM's dtau = {dtau:.2f}, RMS of H/H0 "
+            "error",
+            rms(np.interp(taue[keep] - dtau, tau, H) - He[keep]),
+            scatter / 2 + h_disc,
+            "experimental scatter in Z scaled to H (H0 = 2a)" + note(h_disc),
         )
-        res.notes.append(
-            f"time offset of OpenFOAM a/{fine} height vs Martin & Moyce: dtau = {dtau:.3g} (applied below)"
-        )
-        keep = (taue - dtau >= 0) & (taue - dtau <= tau.max())
-        out.append(
-            Check(
-                f"wall height vs Martin & Moyce, origin shifted by OpenFOAM's dtau = {dtau:.2f}, RMS of H/H0 "
-                "error",
-                rms(np.interp(taue[keep] - dtau, tau, H) - He[keep]),
-                scatter / 2 + h_disc,
-                "experimental scatter in Z scaled to H (H0 = 2a)" + note(h_disc),
-            )
-        )
+    )
     if len(foam) >= 2:
         coarse = sorted(foam)[-2]
         Tc, Zc, Hc = foam[coarse]

@@ -188,10 +188,11 @@ def run_column(resolution):
 
 
 def _yield_excess(sim):
-    from solver.physics.soil import yield_excess
+    from solver.materials import Phase
+    from solver.physics.soil_stress import yield_excess
 
     ps = sim.particles
-    rows = sim.lists[("soil", "soil")].targets
+    rows = sim.ctx.rows[Phase.SOIL]
     return yield_excess(rows, ps["mean_stress"], ps["stress_dev"], ps["material"], sim.plan.materials.soil)
 
 
@@ -456,12 +457,9 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
 if __name__ == "__main__":
     import sys
 
+    from .common import report
+
     if "--study" in sys.argv:
         study()
     else:
-        r = run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION, out_dir=OUT)
-        print(f"{r.particles} particles, {r.steps} steps, {r.wall_time:.1f} s")
-        for c in r.checks:
-            print(c.line())
-        for line in r.notes:
-            print("  note:", line)
+        sys.exit(report(run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION, out_dir=OUT)))

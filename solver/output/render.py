@@ -18,8 +18,8 @@ from .vtk_writer import particles_polydata
 def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None, domain=None):
     pv.OFF_SCREEN = True
     cloud = particles_polydata(fields)
-    if scalar not in cloud.point_data:
-        scalar = "material"
+    if scalar not in cloud.point_data:  # the scene schema refuses this (output.render_field)
+        raise ValueError(f"no field '{scalar}' to render (fields: {', '.join(cloud.point_data)})")
     lo, hi = (
         (np.asarray(domain[0], float), np.asarray(domain[1], float))
         if domain is not None

@@ -10,8 +10,10 @@ Three separate plans, as in LAMMPS / Cabana:
                  in the same order, get only the fields a pass reads (plan.halo_fields).
 Messages are packed byte rows (packing.py) sent point to point to the ranks that need them.
 
-Faults: an unexpected exception on one rank prints that rank's traceback and calls
-MPI_Abort, which ends every rank at once (no rank is left waiting in a collective). Numerical
+Faults: an unexpected exception on one rank prints that rank's traceback, waits until the
+launcher has read it (_hand_output_to_launcher) and calls MPI_Abort, which ends every rank at
+once (no rank is left waiting in a collective). A rank killed outright (SIGKILL) is the
+launcher's to handle: hydra kills the others at once (tests/test_mpi.py). Numerical
 blow-ups are detected after a reduction, so every rank raises together; `agree` then gives all
 of them the message of the rank that saw the problem, and only the root prints it.
 """
@@ -76,6 +78,52 @@ class CommStats:
             "imbalance_last": self.imbalance_last,
             "halo_refresh_bytes_sent": self.refresh_bytes,
         }
+
+
+# How long a failing rank waits for the launcher to take its last output before MPI_Abort. The wait
+# ends as soon as the launcher has read it (normally within milliseconds); the limit only
+# matters when nobody reads the pipe, and then the job must still end.
+HANDOVER_LIMIT_S = 10.0
+
+
+def _unread_bytes(fd):
+    """Bytes written to fd that its reader has not taken yet (a pipe: FIONREAD; a socket: the
+    send queue, TIOCOUTQ), or 0 for anything else (a file or terminal keeps what was written)."""
+    import fcntl
+    import stat
+    import termios
+
+    try:
+        mode = os.fstat(fd).st_mode
+        request = (
+            termios.FIONREAD if stat.S_ISFIFO(mode) else termios.TIOCOUTQ if stat.S_ISSOCK(mode) else None
+        )
+        if request is None:
+            return 0
+        buf = bytearray(4)
+        fcntl.ioctl(fd, request, buf, True)
+        return int.from_bytes(buf, sys.byteorder, signed=True)
+    except OSError:
+        return 0
+
+
+def _hand_output_to_launcher(limit=HANDOVER_LIMIT_S):
+    """Flush stdout and stderr and wait until the launcher has read them, before MPI_Abort.
+
+    A rank's output reaches the user through a pipe to the launcher (hydra's proxy here), and
+    MPI_Abort makes the launcher kill the job: whether bytes still in the pipe are forwarded
+    then is the launcher's choice (Flux, for one, drops them: flux-core issue 3894). A fixed
+    sleep (0.2 s before issue 14) only bets that the launcher runs within that time, which a
+    loaded or descheduled node does not promise. Here the bytes have left the pipe, i.e. the
+    launcher holds them, before the abort is sent."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline and (_unread_bytes(1) > 0 or _unread_bytes(2) > 0):
+        time.sleep(0.001)
 
 
 class _Timer:
@@ -278,8 +326,8 @@ class MpiCommunicator:
     # -- halo ----------------------------------------------------------------------------
     def build_halo(self, particles, reach, fields):
         """Ghosts: copies of other ranks' particles within `reach` (the Verlet list radius) of
-        this rank's box, with every field any pass reads from neighbours (plus the fields the
-        rebuild itself needs). The send lists are kept for refresh_halo."""
+        this rank's box, with every field any term reads from neighbours (`fields`, from the plan;
+        plus the fields the rebuild itself needs). The send lists are kept for refresh_halo."""
         ps = particles
         t0, c0 = time.perf_counter(), time.process_time()
         ps.n_ghost = ps.n_image = 0
@@ -299,7 +347,7 @@ class MpiCommunicator:
         send_rows = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
         recv_counts = self._alltoall_counts(send_counts)
         names = []
-        wanted = list(ALWAYS_AT_BUILD) + [n for group in fields.values() for n in group]
+        wanted = list(ALWAYS_AT_BUILD) + list(fields)
         for n in wanted:
             if n in ps and n not in names:
                 names.append(n)
@@ -368,8 +416,7 @@ class MpiCommunicator:
 
     def abort(self, message, status):
         sys.stderr.write(f"scoursph: rank {self.rank}: {message}\n")
-        sys.stderr.flush()
-        time.sleep(0.2)
+        _hand_output_to_launcher()
         self.comm.Abort(status)
 
     def _excepthook(self, kind, value, tb):
@@ -381,8 +428,7 @@ class MpiCommunicator:
             f"scoursph: error on rank {self.rank} of {self.size} "
             f"(ending all ranks): {kind.__name__}: {value}\n{text}"
         )
-        sys.stderr.flush()
-        time.sleep(0.2)  # let the launcher forward this rank's output before it kills the job
+        _hand_output_to_launcher()
         MPI.COMM_WORLD.Abort(status)
 
     # -- reports -----------------------------------------------------------------------------

@@ -1,0 +1,41 @@
+"""The physics terms, one module each, in the order they run within each stage of a step.
+
+Adding a term: write its module (a Term subclass with its kernel, see solver/term.py and
+docs/adding_a_term.md) and add one line to TERMS. Registration order is execution order
+within a stage; a term that needs another's output comes after it.
+"""
+
+from .artificial_stress import ArtificialStress
+from .equilibrium_soil_images import EquilibriumSoilImages
+from .fixed_particles import FixedParticles
+from .fluid_rates import FluidRates
+from .frictional_walls import FrictionalWalls
+from .gravity import Gravity
+from .hydrostatic_image_pressure import HydrostaticImagePressure
+from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
+from .soil_rates import SoilRates
+from .soil_stress import SoilReturnMapping, SoilStressState
+from .symplectic_continuity import SymplecticContinuity
+from .tait_eos import TaitEquationOfState
+from .viscous_stress import ViscousStress
+from .wall_images import WallImages
+
+TERMS = (
+    WallImages,
+    Gravity,
+    TaitEquationOfState,
+    HydrostaticImagePressure,
+    PorePressureAtSoil,
+    SoilStressState,
+    ArtificialStress,
+    EquilibriumSoilImages,
+    FrictionalWalls,
+    ViscousStress,
+    FluidRates,
+    SoilRates,
+    SeepageOnSoil,
+    SeepageOnWater,
+    FixedParticles,
+    SoilReturnMapping,
+    SymplecticContinuity,
+)

@@ -1,0 +1,180 @@
+"""Density diffusion for weakly compressible water: delta-SPH and its hydrostatic variant.
+
+A term added to the continuity equation (seed eq. 6) that damps the high-frequency density
+(pressure) noise of weakly compressible SPH:
+
+  Molteni & Colagrossi (2009), eq. (8), with Antuono et al. (2010), eqs. (6)-(8) notation:
+      D_i = delta h c0 sum_j psi_ij . grad_i W_ij V_j,          V_j = m_j / rho_j
+      psi_ij = 2 (rho_j - rho_i) x_ji / |x_ji|^2,               x_ji = x_j - x_i
+  Since x_ji . grad_i W_ij = -r dW/dr, each pair adds 2 delta h c0 (rho_i - rho_j) (dW/dr / r) V_j:
+  the SPH Laplacian of Brookshaw (1985) / Cleary & Monaghan (1999) times delta h c0, a diffusion
+  of rho with diffusivity delta h c0 (it vanishes as h -> 0, first order).
+
+  Antuono et al. (2010), eq. (7) (optional, `grad_rho`): psi_ij also subtracts
+  (<grad rho>_i^L + <grad rho>_j^L) . x_ji, the renormalised density gradients of
+  renormalised_density_gradient below (their eq. 8). For a linear density field the two parts
+  cancel pair by pair, so the term is consistent, at the price of one more neighbour pass (and
+  an exchange of a vector field) per evaluation.
+
+  Fourtakas et al. (2019), Computers & Fluids 190:346, eqs. (13)-(14) (optional, `rho_ref`):
+  diffuse only the dynamic density: psi_ij = 2 [(rho_j - rho_i) - (rho_j^H - rho_i^H)] x_ji / r^2,
+  so a fluid at rest in hydrostatic equilibrium (rho = rho^H) sees exactly zero diffusion, where
+  the plain form pulls the stratified density together (and the water column sinks). Fourtakas et
+  al. write rho_ji^H = rho0 [(1 + rho0 g z_ij / B)^(1/gamma) - 1] per pair; here rho^H is a
+  per-particle field given by the caller (hydrostatic_reference_density below), which equals
+  theirs to first order in rho0 g z_ij / B, keeps each pair term antisymmetric (so sum_i V_i D_i
+  = 0: the diffusion creates no mass), and is exactly the state the hydrostatic start builds.
+
+delta = 0.1: Molteni & Colagrossi (2009) and Antuono et al. (2010) recommend 0.1 (Antuono et al.
+2010, sec. 6: results insensitive within 0.05-0.2); DualSPHysics' default DensityDT value is 0.1.
+
+Gather loop over a target's neighbour row, in the style of fluid.py: each target writes only
+its own rate (adds into drho), optional terms are None-pruned at compile time, is3d None in 2D.
+Walls by image particles: an image carries its source's rho (and rho_ref), so the density
+(dynamic density) is mirrored and has zero normal gradient at the wall: no diffusive flux through it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from ..config import kernel
+from ..kernels import cubic_spline_dwdr
+
+
+@kernel(parallel=True)
+def density_diffusion(
+    targets,
+    start,
+    index,
+    x,
+    rho,
+    mass,
+    material,
+    sound_speed,
+    delta,
+    h,
+    norm,
+    drho,
+    rho_ref=None,  # hydrostatic reference density per particle: Fourtakas et al. (2019)
+    grad_rho=None,  # renormalised density gradient per particle: Antuono et al. (2010)
+    is3d=None,
+):
+    """drho_i += delta h c0 sum_j psi_ij . grad_i W_ij m_j / rho_j (see module doc for psi_ij)."""
+    for t in prange(targets.shape[0]):
+        i = targets[t]
+        xi0, xi1 = x[i, 0], x[i, 1]
+        xi2 = 0.0
+        if is3d is not None:
+            xi2 = x[i, 2]
+        dyn_i = rho[i]  # the density diffused: rho, or its dynamic part rho - rho^H (Fourtakas et al.)
+        if rho_ref is not None:
+            dyn_i -= rho_ref[i]
+        gi0 = gi1 = gi2 = 0.0
+        if grad_rho is not None:
+            gi0, gi1 = grad_rho[i, 0], grad_rho[i, 1]
+            if is3d is not None:
+                gi2 = grad_rho[i, 2]
+        acc = 0.0
+        for s in range(start[t], start[t + 1]):
+            j = index[s]
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            d2 = 0.0
+            if is3d is not None:
+                d2 = xi2 - x[j, 2]
+            r2 = d0 * d0 + d1 * d1 + d2 * d2
+            r = np.sqrt(r2) + 1e-300
+            fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij, x_ij = x_i - x_j
+            # psi_ij . grad_i W_ij = 2 (rho_j - rho_i) (x_ji . x_ij) fr / r^2 = 2 (rho_i - rho_j) fr
+            dyn_j = rho[j]
+            if rho_ref is not None:  # each particle's dynamic part first: exactly 0 - 0 at rest
+                dyn_j -= rho_ref[j]
+            term = 2.0 * (dyn_i - dyn_j) * fr
+            if grad_rho is not None:  # - (g_i + g_j) . grad_i W_ij  (Antuono et al. 2010, eq. 7)
+                gs = (gi0 + grad_rho[j, 0]) * d0 + (gi1 + grad_rho[j, 1]) * d1
+                if is3d is not None:
+                    gs += (gi2 + grad_rho[j, 2]) * d2
+                term -= gs * fr
+            acc += term * mass[j] / rho[j]
+        drho[i] += delta * h * sound_speed[material[i]] * acc
+
+
+@kernel(parallel=True)
+def renormalised_density_gradient(targets, start, index, x, rho, mass, h, norm, grad_rho, is3d=None):
+    """<grad rho>_i^L = sum_j (rho_j - rho_i) L_i grad_i W_ij V_j, L_i = [sum_j x_ji (x) grad_i W_ij V_j]^-1
+    (Antuono et al. 2010, eq. 8; Randles & Libersky 1996): exact for linear rho where the kernel
+    support is full or truncated. A target whose matrix is singular (an isolated particle) gets 0."""
+    for t in prange(targets.shape[0]):
+        i = targets[t]
+        xi0, xi1 = x[i, 0], x[i, 1]
+        xi2 = 0.0
+        if is3d is not None:
+            xi2 = x[i, 2]
+        rho_i = rho[i]
+        # M_ab = sum_j x_ji^a (grad_i W)^b V_j = -sum_j fr V_j x_ij^a x_ij^b (symmetric);
+        # u = sum_j (rho_j - rho_i) grad_i W_ij V_j
+        m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        u0 = u1 = u2 = 0.0
+        for s in range(start[t], start[t + 1]):
+            j = index[s]
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            d2 = 0.0
+            if is3d is not None:
+                d2 = xi2 - x[j, 2]
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+            fv = cubic_spline_dwdr(r, h, norm) / r * mass[j] / rho[j]
+            m00 -= fv * d0 * d0
+            m01 -= fv * d0 * d1
+            m11 -= fv * d1 * d1
+            dr = rho[j] - rho_i
+            u0 += dr * fv * d0
+            u1 += dr * fv * d1
+            if is3d is not None:
+                m02 -= fv * d0 * d2
+                m12 -= fv * d1 * d2
+                m22 -= fv * d2 * d2
+                u2 += dr * fv * d2
+        if is3d is not None:
+            c00 = m11 * m22 - m12 * m12
+            c01 = m02 * m12 - m01 * m22
+            c02 = m01 * m12 - m02 * m11
+            det = m00 * c00 + m01 * c01 + m02 * c02
+            if abs(det) > 1e-300:
+                c11 = m00 * m22 - m02 * m02
+                c12 = m01 * m02 - m00 * m12
+                c22 = m00 * m11 - m01 * m01
+                grad_rho[i, 0] = (c00 * u0 + c01 * u1 + c02 * u2) / det
+                grad_rho[i, 1] = (c01 * u0 + c11 * u1 + c12 * u2) / det
+                grad_rho[i, 2] = (c02 * u0 + c12 * u1 + c22 * u2) / det
+            else:
+                grad_rho[i, 0] = grad_rho[i, 1] = grad_rho[i, 2] = 0.0
+        else:
+            det = m00 * m11 - m01 * m01
+            if abs(det) > 1e-300:
+                grad_rho[i, 0] = (m11 * u0 - m01 * u1) / det
+                grad_rho[i, 1] = (m00 * u1 - m01 * u0) / det
+            else:
+                grad_rho[i, 0] = grad_rho[i, 1] = 0.0
+
+
+@kernel(parallel=True)
+def hydrostatic_reference_density(n, x, material, gravity, level, rho0, eos_b, exponent, rho_ref):
+    """rho^H_i = rho0 (1 + rho0 |g| (level - z_i) / B)^(1/gamma) for rows [0, n): the inverse Tait law
+    (seed eq. 9) of the hydrostatic pressure rho0 |g| (level - z_i), z measured along -g. Only
+    differences rho^H_j - rho^H_i enter the diffusion; `level` (e.g. the initial free surface)
+    sets the base, and it moves those differences only at second order in rho0 |g| dz / B."""
+    dim = x.shape[1]
+    g2 = 0.0
+    for a in range(dim):
+        g2 += gravity[a] * gravity[a]
+    gn = np.sqrt(g2)
+    for i in prange(n):
+        m = material[i]
+        depth = level  # level - z, z = -g^ . x
+        for a in range(dim):
+            if gn > 0.0:
+                depth += gravity[a] / gn * x[i, a]
+        rho_ref[i] = rho0[m] * (1.0 + rho0[m] * gn * depth / eos_b[m]) ** (1.0 / exponent[m])

@@ -1,0 +1,357 @@
+"""Water-soil coupling: the seepage force (seed eq. 18) and, in the mixture formulation, the pore
+pressure acting on the soil skeleton (buoyancy, effective stress).
+
+Both phases are their own particle sets that overlap in a saturated bed; each phase's SPH density
+is its mass per unit mixture volume (apparent density: (1 - n) rho_grain for the skeleton, which is
+the soil material's `density`, its dry density; n rho_w for pore water in the mixture formulation).
+Every water-soil pair (water a, soil b) exchanges one force, equal and opposite, so momentum is
+conserved pair by pair (docs/seepage.md derives each term):
+
+  drag       F_ab = V_a V_b C W_ab (v_a - v_b)                    C = n gamma_w / k    ("seed")
+                                                                 C = n^2 gamma_w / k  ("mixture")
+  buoyancy   F_ab = -(1 - n) V_a V_b (p_a - p~_b) grad_b W_ab      ("mixture" only)
+
+with F_ab the force on soil b, the water getting -F_ab. "seed" is exactly the seed's eqs. (18),
+(20), (21) with the erratum of DESIGN.md (the sums run over the other phase with one pair value of
+f = gamma_w n (v_w - v_s) / k, the force per unit volume of pore water: Darcy's q = k i). The
+mixture form is Biot's (1941) two-phase mixture as used in SPH by Bui & Nguyen (2017, Int. J.
+Solids Struct. 125:244): per unit mixture volume the skeleton feels div sigma' - (1 - n) grad p + R
+and the water -n grad p - R, R = n^2 gamma_w (v_w - v_s) / k (Biot/Prevost drag, Morikawa & Asai
+2022 eqs. 7, 9). The water's own pass gives -grad p; the pair buoyancy, a difference-form gradient
+of p with p~_b the pore pressure interpolated at the soil particle (Shepard), gives -(1 - n) grad p
+to the skeleton and +(1 - n) grad p to the water. In the mixture form the water's continuity also
+feels the pores squeezed by the skeleton (Biot's storage: D ln rho_w/Dt gets -(phi/n) div v_s,
+phi = 1 - n the solid fraction at the water particle), which is what drives consolidation, and
+pore water starts at n rho_w with that as its EOS reference (tait_eos.py: p from rho / rho_ref).
+
+The drag is explicit and its stiffness limits the step: the relaxation rate of a pair's relative
+velocity is lambda = lambda_a + lambda_b, lambda_i = sum_j K_ij / m_i (~ n g / k (1 + n rho_w /
+rho_s)); dt <= cfl.drag / lambda_max (numerics.cfl.drag), evaluated every step from these sums.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import prange
+
+from ..config import kernel
+from ..kernels import cubic_spline_dwdr, cubic_spline_w
+from ..materials import Phase
+from ..particles import FieldSpec, Mirror
+from ..scene import Seepage, Soil
+from ..term import Equation, Stage, Term
+from ..timestep import Constraint
+
+PORE_PRESSURE = FieldSpec(
+    0, np.float64, "pore pressure interpolated at soil particles (mixture buoyancy)", Mirror.SCALAR
+)
+
+
+@dataclass(frozen=True)
+class SeepageSettings:
+    """Per-material constants of the coupling, indexed by material id (zeros for water)."""
+
+    formulation: Seepage
+    drag: np.ndarray  # C of the drag per unit mixture volume per unit relative velocity (N s / m^4)
+    solid: np.ndarray  # 1 - n of each soil material (mixture buoyancy), 0 in the seed form
+    grain_density: np.ndarray  # rho_grain = rho_dry / (1 - n), for the solid fraction at water
+    cfl_drag: float
+
+    @classmethod
+    def of(cls, scene, materials):
+        """The coupling of a scene with water and soil, or None."""
+        if not (materials.has_phase(Phase.WATER) and materials.has_phase(Phase.SOIL)):
+            return None
+        rho_w = max(float(materials.rho0[k]) for k in materials.ids_of_phase(Phase.WATER))
+        g = float(np.linalg.norm(scene.scene.gravity)) or STANDARD_GRAVITY
+        gamma_w = rho_w * g
+        form = scene.numerics.seepage
+        n_mat = len(materials.names)
+        drag, solid, grain = np.zeros(n_mat), np.zeros(n_mat), np.zeros(n_mat)
+        for k, name in enumerate(materials.names):
+            mat = scene.materials[name]
+            if not isinstance(mat, Soil):
+                continue
+            n, perm = mat.porosity, mat.permeability
+            drag[k] = (n if form == Seepage.SEED else n * n) * gamma_w / perm
+            solid[k] = 0.0 if form == Seepage.SEED else 1.0 - n
+            grain[k] = mat.density / (1.0 - n)
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag)
+
+    @property
+    def mixture(self):
+        return self.formulation == Seepage.MIXTURE
+
+
+STANDARD_GRAVITY = 9.81
+"""g in gamma_w = rho_w g when a scene switches gravity off: k is measured under gravity, so the drag
+C = n^2 rho_w g / k (= n^2 mu / k_intrinsic) keeps its value (as Morikawa & Asai 2022 do)."""
+
+
+@kernel
+def pair_force(d0, d1, d2, u0, u1, u2, p_a, p_b, vol_a, vol_b, drag, solid, h, norm):
+    """Force on soil b from water a and the pair's drag conductance K: d = x_b - x_a, u = v_a - v_b,
+    p_b the pore pressure interpolated at b. Both sides call it with the same arguments, so the two
+    forces are equal and opposite to the last bit."""
+    r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+    k = vol_a * vol_b * drag * cubic_spline_w(r, h, norm)  # drag conductance K_ab (N s / m)
+    q = -solid * vol_a * vol_b * (p_a - p_b) * cubic_spline_dwdr(r, h, norm) / r  # buoyancy along d
+    return k * u0 + q * d0, k * u1 + q * d1, k * u2 + q * d2, k
+
+
+@kernel(parallel=True)
+def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore, is3d=None):
+    """p~_b = sum_a V_a p_a W_ab / sum_a V_a W_ab over the water neighbours a of soil b (Shepard
+    interpolation); 0 for soil with no water within reach (dry soil)."""
+    for t in prange(targets.shape[0]):
+        b = targets[t]
+        num = den = 0.0
+        for s in range(start[t], start[t + 1]):
+            a = index[s]
+            d0 = x[b, 0] - x[a, 0]
+            d1 = x[b, 1] - x[a, 1]
+            d2 = 0.0
+            if is3d is not None:
+                d2 = x[b, 2] - x[a, 2]
+            w = mass[a] / rho[a] * cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
+            num += w * p[a]
+            den += w
+        pore[b] = num / den if den > 0.0 else 0.0
+
+
+@kernel(parallel=True)
+def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, p=None,
+                    pore=None, is3d=None):  # fmt: skip
+    """Soil rows b: add sum_a F_ab / m_b (pair_force) over water neighbours a; returns the largest
+    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy)."""
+    worst = 0.0
+    for t in prange(targets.shape[0]):
+        b = targets[t]
+        mb = material[b]
+        vol_b = mass[b] / rho[b]
+        f0 = f1 = f2 = lam = 0.0
+        p_b = pore[b] if pore is not None else 0.0
+        for s in range(start[t], start[t + 1]):
+            a = index[s]
+            d2 = u2 = 0.0
+            if is3d is not None:
+                d2 = x[b, 2] - x[a, 2]
+                u2 = v[a, 2] - v[b, 2]
+            p_a = p[a] if p is not None else 0.0
+            g0, g1, g2, k = pair_force(
+                x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], d2, v[a, 0] - v[b, 0], v[a, 1] - v[b, 1], u2,
+                p_a, p_b, mass[a] / rho[a], vol_b, drag[mb], solid[mb], h, norm,
+            )  # fmt: skip
+            f0 += g0
+            f1 += g1
+            f2 += g2
+            lam += k
+        inv_m = 1.0 / mass[b]
+        acc[b, 0] += f0 * inv_m
+        acc[b, 1] += f1 * inv_m
+        if is3d is not None:
+            acc[b, 2] += f2 * inv_m
+        worst = max(worst, lam * inv_m)
+    return worst
+
+
+@kernel(parallel=True)
+def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
+                     acc, drho=None, p=None, pore=None, is3d=None):  # fmt: skip
+    """Water rows a: add -sum_b F_ab / m_a (pair_force) over soil neighbours b; returns the largest
+    lambda_a = sum_b K_ab / m_a. With drho (mixture), also Biot's storage term
+    drho_a += -rho_a (phi_a / n_a) div v_s(x_a), phi_a = sum_b (m_b / rho_grain) W_ab the solid
+    fraction and div v_s = sum_b V_b (v_b - v~) . grad_a W_ab with v~ the Shepard soil velocity."""
+    worst = 0.0
+    for t in prange(targets.shape[0]):
+        a = targets[t]
+        vol_a = mass[a] / rho[a]
+        p_a = p[a] if p is not None else 0.0
+        f0 = f1 = f2 = lam = 0.0
+        for s in range(start[t], start[t + 1]):
+            b = index[s]
+            mb = material[b]
+            d2 = u2 = 0.0
+            if is3d is not None:
+                d2 = x[b, 2] - x[a, 2]
+                u2 = v[a, 2] - v[b, 2]
+            p_b = pore[b] if pore is not None else 0.0
+            g0, g1, g2, k = pair_force(
+                x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], d2, v[a, 0] - v[b, 0], v[a, 1] - v[b, 1], u2,
+                p_a, p_b, vol_a, mass[b] / rho[b], drag[mb], solid[mb], h, norm,
+            )  # fmt: skip
+            f0 += g0
+            f1 += g1
+            f2 += g2
+            lam += k
+        inv_m = 1.0 / mass[a]
+        acc[a, 0] -= f0 * inv_m
+        acc[a, 1] -= f1 * inv_m
+        if is3d is not None:
+            acc[a, 2] -= f2 * inv_m
+        worst = max(worst, lam * inv_m)
+        if drho is not None:
+            drho[a] += _storage(a, start[t], start[t + 1], index, x, v, rho, mass, material, grain_density,
+                                h, norm, is3d)  # fmt: skip
+    return worst
+
+
+@kernel
+def _storage(a, first, last, index, x, v, rho, mass, material, grain_density, h, norm, is3d):
+    """-rho_a (phi / n) div v_s at water particle a from its soil neighbours index[first:last]."""
+    vol = phi = s0 = s1 = s2 = 0.0
+    for s in range(first, last):
+        b = index[s]
+        d0 = x[a, 0] - x[b, 0]
+        d1 = x[a, 1] - x[b, 1]
+        d2 = 0.0
+        if is3d is not None:
+            d2 = x[a, 2] - x[b, 2]
+        w = cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
+        vb = mass[b] / rho[b] * w
+        vol += vb
+        phi += mass[b] / grain_density[material[b]] * w
+        s0 += vb * v[b, 0]
+        s1 += vb * v[b, 1]
+        if is3d is not None:
+            s2 += vb * v[b, 2]
+    if vol == 0.0:
+        return 0.0
+    s0 /= vol
+    s1 /= vol
+    s2 /= vol
+    div = 0.0
+    for s in range(first, last):
+        b = index[s]
+        d0 = x[a, 0] - x[b, 0]
+        d1 = x[a, 1] - x[b, 1]
+        d2 = 0.0
+        if is3d is not None:
+            d2 = x[a, 2] - x[b, 2]
+        r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+        fr = cubic_spline_dwdr(r, h, norm) / r * mass[b] / rho[b]  # grad_a W_ab = fr d
+        div += ((v[b, 0] - s0) * d0 + (v[b, 1] - s1) * d1) * fr
+        if is3d is not None:
+            div += (v[b, 2] - s2) * d2 * fr
+    phi = min(phi, 0.95)  # a water particle is never entirely inside grains
+    return -rho[a] * phi / (1.0 - phi) * div
+
+
+class PorePressureAtSoil(Term):
+    """p~ at every owned soil particle from its water neighbours (mixture buoyancy)."""
+
+    name = "pore pressure at soil"
+    stage = Stage.STATE
+    targets = Phase.SOIL
+    neighbours = Phase.WATER
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls() if settings is not None and settings.mixture else None
+
+    def __init__(self):
+        super().__init__()
+        self.fields = {"pore_pressure": PORE_PRESSURE}
+        self.reads = ("x", "rho", "mass", "p")
+        self.writes = ("pore_pressure",)
+        self.equations = (Equation("p~_b = sum_a V_a p_a W_ab / sum_a V_a W_ab", "Shepard interpolation"),)
+
+    def run(self, ctx):
+        ps, nl = ctx.particles, ctx.neighbours(self)
+        pore_pressure_at_soil(
+            nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["p"], ctx.h, ctx.norm,
+            ps["pore_pressure"], ctx.is3d,
+        )  # fmt: skip
+
+
+class _Coupling(Term):
+    """What the two sides of the coupling share."""
+
+    stage = Stage.RATES
+
+    def __init__(self, settings: SeepageSettings):
+        super().__init__()
+        self.settings = settings
+        self.reads = ("x", "v", "rho", "mass", "material") + (
+            ("p", "pore_pressure") if settings.mixture else ()
+        )
+        self.adds_to = ("acc",)
+        drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
+        equations = [
+            Equation(
+                f"seepage drag V_a V_b C W_ab (v_w - v_s), {drag}", "seed eqs. (18), (20), (21), erratum"
+            )
+        ]
+        if settings.mixture:
+            equations.append(
+                Equation(
+                    "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+                    "Bui & Nguyen (2017)",
+                )
+            )
+        self.equations = tuple(equations)
+
+
+class SeepageOnSoil(_Coupling):
+    """The seepage force (and in the mixture form the buoyancy) on the soil from the water."""
+
+    name = "seepage on soil"
+    targets = Phase.SOIL
+    neighbours = Phase.WATER
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls(settings) if settings is not None else None
+
+    def run(self, ctx):
+        ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
+        mix = st.mixture
+        ctx.shared["seepage soil rate"] = seepage_on_soil(
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            st.solid, ctx.h, ctx.norm, ps["acc"], ps["p"] if mix else None,
+            ps["pore_pressure"] if mix else None, ctx.is3d,
+        )  # fmt: skip
+
+
+class SeepageOnWater(_Coupling):
+    """The reaction on the water: minus the force on the soil, pair by pair; and (mixture) the pores
+    squeezed by the skeleton in the water's continuity."""
+
+    name = "seepage on water"
+    targets = Phase.WATER
+    neighbours = Phase.SOIL
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls(settings) if settings is not None else None
+
+    def __init__(self, settings):
+        super().__init__(settings)
+        self.lam = 0.0  # the largest relaxation rate of the water side at the last step
+        if settings.mixture:
+            self.adds_to = ("acc", "drho")
+            self.equations += (
+                Equation(
+                    "Biot storage: drho_w += -rho_w (phi / n) div v_s", "Biot (1941); Verruijt (2016) ch. 2"
+                ),
+            )
+        self.dt_limit = Constraint("seepage drag", "dt <= cfl.drag / (lambda_soil + lambda_water)", None)
+
+    def dt_now(self, ctx):
+        """dt <= cfl.drag / (lambda_soil + lambda_water), the largest relaxation rates of each side."""
+        lam = self.lam + ctx.shared["seepage soil rate"]
+        return self.settings.cfl_drag / lam if lam > 0 else np.inf
+
+    def run(self, ctx):
+        ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
+        mix = st.mixture
+        self.lam = seepage_on_water(
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
+            ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+        )  # fmt: skip

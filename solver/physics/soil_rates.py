@@ -1,0 +1,242 @@
+"""Soil rates from soil neighbours (seed sec. 2.2, 2.4), fused in one pass:
+
+continuity        over soil neighbours                                     seed eq. (6)
+momentum          sigma = -p delta + s, eq. (20) without seepage            seed eqs. (12), (20)
+artificial visc.  Monaghan, alpha = beta = 1 for soil                       seed eq. (19)
+artificial stress f_ij^n (R_i + R_j) (artificial_stress.py)                 Gray, Monaghan & Swift (2001)
+deviatoric rate   ds/dt = 2G (eps') + s R^T + R s  (Jaumann)               seed eqs. (13)-(15)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from ..config import kernel
+from ..fields import RHO_HALF
+from ..kernels import cubic_spline_dwdr, cubic_spline_w
+from ..materials import Phase
+from ..particles import FieldSpec
+from ..tensors import N_SYM
+from ..term import Equation, Integrated, Stage, Term
+from . import velocity_gradient
+from .artificial_stress import ArtificialStressSettings
+
+
+@kernel
+def jaumann(s0, s1, s2, s3, s4, s5, w01, w02, w12):
+    """J = W s - s W (= s^{ag} R^{bg} + s^{gb} R^{ag} of seed eq. 13 with R antisymmetric),
+    components (xx, yy, zz, xy, yz, xz); W_ab = (dv^a/dx^b - dv^b/dx^a)/2 (eq. 15)."""
+    j00 = 2.0 * (w01 * s3 + w02 * s5)
+    j11 = 2.0 * (w12 * s4 - w01 * s3)
+    j22 = -2.0 * (w02 * s5 + w12 * s4)
+    j01 = w01 * (s1 - s0) + w02 * s4 + w12 * s5
+    j12 = w12 * (s2 - s1) - w01 * s5 - w02 * s3
+    j02 = w02 * (s2 - s0) + w01 * s4 - w12 * s3
+    return j00, j11, j22, j01, j12, j02
+
+
+@kernel(parallel=True)
+def soil_rates(
+    targets, start, index, x, v, rho, mean_stress, s, mass, material, sound_speed, shear, h, norm,
+    drho, acc, ds,
+    av_alpha=None, av_beta=None,  # Monaghan artificial viscosity, seed eq. (19)
+    art=None, art_n=2.55, inv_w_dx=0.0,  # artificial stress (Gray et al. 2001): f_ij^n (R_i + R_j)
+):  # fmt: skip
+    """Continuity (6), momentum (20) without seepage, and the Hooke-Jaumann rate (13)-(15).
+    Adds into drho and acc; writes ds. The velocity gradient is that of velocity_gradient.py."""
+    three = x.shape[1] == 3
+    hh = 0.01 * h * h
+    for t in prange(targets.shape[0]):
+        i = targets[t]
+        xi0, xi1 = x[i, 0], x[i, 1]
+        vi0, vi1 = v[i, 0], v[i, 1]
+        xi2 = x[i, 2] if three else 0.0
+        vi2 = v[i, 2] if three else 0.0
+        rho_i = rho[i]
+        ri2 = 1.0 / (rho_i * rho_i)
+        pi = mean_stress[i]
+        # sigma_i / rho_i^2, eq. (12)
+        q00 = (s[i, 0] - pi) * ri2
+        q11 = (s[i, 1] - pi) * ri2
+        q22 = (s[i, 2] - pi) * ri2
+        q01 = s[i, 3] * ri2
+        q12 = s[i, 4] * ri2
+        q02 = s[i, 5] * ri2
+        mi = material[i]
+        quiet_i = True  # R_i = 0 (no tension): the common case, see below
+        if art is not None:
+            quiet_i = (
+                art[i, 0] == 0.0
+                and art[i, 1] == 0.0
+                and art[i, 2] == 0.0
+                and art[i, 3] == 0.0
+                and art[i, 4] == 0.0
+                and art[i, 5] == 0.0
+            )
+        d_rho = 0.0
+        a0 = a1 = a2 = 0.0
+        g = velocity_gradient.ZERO
+        for k in range(start[t], start[t + 1]):
+            j = index[k]
+            d0 = xi0 - x[j, 0]
+            d1 = xi1 - x[j, 1]
+            d2 = xi2 - x[j, 2] if three else 0.0
+            u0 = vi0 - v[j, 0]
+            u1 = vi1 - v[j, 1]
+            u2 = vi2 - v[j, 2] if three else 0.0
+            r2 = d0 * d0 + d1 * d1 + d2 * d2
+            r = np.sqrt(r2) + 1e-300
+            vr = u0 * d0 + u1 * d1 + u2 * d2
+            fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij
+            m_j = mass[j]
+            rho_j = rho[j]
+            rj2 = 1.0 / (rho_j * rho_j)
+            d_rho += m_j * vr * fr  # eq. (6)
+            pj = mean_stress[j]
+            t00 = q00 + (s[j, 0] - pj) * rj2  # eq. (20): sigma_i/rho_i^2 + sigma_j/rho_j^2
+            t11 = q11 + (s[j, 1] - pj) * rj2
+            t01 = q01 + s[j, 3] * rj2
+            diag = 0.0
+            if av_alpha is not None:  # eq. (19) with beta phi^2 (erratum)
+                mj = material[j]
+                phi = h * min(vr, 0.0) / (r2 + hh)
+                c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
+                alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
+                beta = 0.5 * (av_beta[mi] + av_beta[mj])
+                diag -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
+            fn = 0.0
+            if art is not None:  # Gray et al. (2001): + f^n (R_i + R_j)
+                # skipped when R_i = R_j = 0 (both particles in compression), where it adds exactly
+                # zero: the kernel value and the power f^n were 60 % of a cohesionless soil step
+                if not (
+                    quiet_i
+                    and art[j, 0] == 0.0
+                    and art[j, 1] == 0.0
+                    and art[j, 2] == 0.0
+                    and art[j, 3] == 0.0
+                    and art[j, 4] == 0.0
+                    and art[j, 5] == 0.0
+                ):
+                    fn = (cubic_spline_w(r, h, norm) * inv_w_dx) ** art_n
+                    t00 += fn * (art[i, 0] + art[j, 0])
+                    t11 += fn * (art[i, 1] + art[j, 1])
+                    t01 += fn * (art[i, 3] + art[j, 3])
+            fm = m_j * fr
+            if three:
+                t22 = q22 + (s[j, 2] - pj) * rj2
+                t12 = q12 + s[j, 4] * rj2
+                t02 = q02 + s[j, 5] * rj2
+                if art is not None and fn != 0.0:
+                    t22 += fn * (art[i, 2] + art[j, 2])
+                    t12 += fn * (art[i, 4] + art[j, 4])
+                    t02 += fn * (art[i, 5] + art[j, 5])
+                a0 += fm * ((t00 + diag) * d0 + t01 * d1 + t02 * d2)
+                a1 += fm * (t01 * d0 + (t11 + diag) * d1 + t12 * d2)
+                a2 += fm * (t02 * d0 + t12 * d1 + (t22 + diag) * d2)
+            else:
+                a0 += fm * ((t00 + diag) * d0 + t01 * d1)
+                a1 += fm * (t01 * d0 + (t11 + diag) * d1)
+            f = fr * m_j / rho_j  # velocity gradient (Liu & Liu 2003)
+            g = velocity_gradient.add_pair(g, u0, u1, u2, f, d0, d1, d2, three)
+        g00, g01, g02, g10, g11, g12, g20, g21, g22 = g
+        drho[i] += d_rho
+        acc[i, 0] += a0
+        acc[i, 1] += a1
+        if three:
+            acc[i, 2] += a2
+        # eq. (14): strain rate e_ab = (g_ab + g_ba)/2;
+        # eq. (15): W_ab = (dv^a/dx^b - dv^b/dx^a)/2 = (g_ba - g_ab)/2
+        third = (g00 + g11 + g22) / 3.0
+        two_g = 2.0 * shear[mi]
+        w01 = 0.5 * (g10 - g01)
+        w02 = 0.5 * (g20 - g02)
+        w12 = 0.5 * (g21 - g12)
+        j00, j11, j22, j01, j12, j02 = jaumann(
+            s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], w01, w02, w12
+        )
+        ds[i, 0] = two_g * (g00 - third) + j00  # eq. (13)
+        ds[i, 1] = two_g * (g11 - third) + j11
+        ds[i, 2] = two_g * (g22 - third) + j22
+        ds[i, 3] = two_g * 0.5 * (g01 + g10) + j01
+        ds[i, 4] = two_g * 0.5 * (g12 + g21) + j12
+        ds[i, 5] = two_g * 0.5 * (g02 + g20) + j02
+
+
+class SoilRates(Term):
+    """Continuity, stress divergence, AV, artificial stress and the Hooke-Jaumann rate of soil."""
+
+    name = "soil rates"
+    stage = Stage.RATES
+    targets = Phase.SOIL
+    neighbours = Phase.SOIL
+
+    @classmethod
+    def build(cls, scene, materials):
+        return cls(scene, materials) if materials.has_phase(Phase.SOIL) else None
+
+    def __init__(self, scene, materials):
+        super().__init__()
+        soil = materials.ids_of_phase(Phase.SOIL)
+        self.sound_speed = materials.sound_speed
+        self.shear = materials.soil.shear
+        av = any(materials.av_alpha[k] > 0 or materials.av_beta[k] > 0 for k in soil)
+        self.av_alpha = materials.av_alpha if av else None
+        self.av_beta = materials.av_beta if av else None
+        self.art = ArtificialStressSettings.of(scene)
+        self.fields = {
+            "rho_half": RHO_HALF,
+            "stress_dev_half": FieldSpec(N_SYM, np.float64, "leap-frog s at n+1/2 (eq. 27)"),
+            "dstress": FieldSpec(N_SYM, np.float64, "Hooke-Jaumann rate of s (eqs. 13-15)"),
+        }
+        self.integrates = (
+            Integrated("rho", "rho_half", "drho"),
+            Integrated("stress_dev", "stress_dev_half", "dstress"),
+        )
+        self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev") + (
+            ("art_stress",) if self.art else ()
+        )
+        self.adds_to = ("acc", "drho")
+        self.writes = ("dstress",)
+        equations = [
+            Equation("continuity", "seed eq. (6)"),
+            Equation("stress divergence", "seed eqs. (12), (20)"),
+            Equation("Hooke-Jaumann deviatoric rate", "seed eqs. (13)-(15)"),
+        ]
+        if av:
+            equations.append(
+                Equation("Monaghan artificial viscosity", "seed eq. (19), alpha = beta = 1 for soil")
+            )
+        if self.art:
+            equations.append(
+                Equation("artificial stress f_ij^n (R_i + R_j)", "Gray, Monaghan & Swift (2001)")
+            )
+        self.equations = tuple(equations)
+
+    def run(self, ctx):
+        ps, nl = ctx.particles, ctx.neighbours(self)
+        art = self.art
+        soil_rates(
+            nl.targets,
+            nl.start,
+            nl.index,
+            ps["x"],
+            ps["v"],
+            ps["rho"],
+            ps["mean_stress"],
+            ps["stress_dev"],
+            ps["mass"],
+            ps["material"],
+            self.sound_speed,
+            self.shear,
+            ctx.h,
+            ctx.norm,
+            ps["drho"],
+            ps["acc"],
+            ps["dstress"],
+            self.av_alpha,
+            self.av_beta,
+            ps["art_stress"] if art else None,
+            art.exponent if art else 0.0,
+            art.inv_w_dx if art else 0.0,
+        )

@@ -1,0 +1,278 @@
+"""Soil stress state: mean stress and the plastic return mapping (seed sec. 2.2; Bui et al. 2008).
+
+  total stress      sigma = -p delta + s                                   seed eq. (12)
+  mean stress       p = K (rho/rho0 - 1) (+ K eps_vp, plastic dilation)      seed eq. (17)
+  yield             Mohr-Coulomb scale-back sqrt(J2) <= c + p tan(phi)       seed eq. (16)
+                    or Drucker-Prager, plane-strain fit, non-associated flow,
+                    tension cracking and scale-back                           Bui et al. (2008)
+
+Pressure p is positive in compression. Stress tensors are 6 components (solver/tensors.py);
+2D is plane strain (s_zz is kept and evolves). Two terms: the state at step n before the pair
+passes (SoilStressState), and the return mapping of the half-step stress after the kick, which
+also accumulates the plastic dilation (SoilReturnMapping).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from ..config import kernel
+from ..materials import Phase, YieldModel
+from ..particles import FieldSpec, Mirror
+from ..tensors import N_SYM
+from ..term import Equation, Stage, Term
+from ..timestep import Constraint
+
+MOHR_COULOMB = int(YieldModel.MOHR_COULOMB)  # plain ints: compile-time constants in the kernels
+DRUCKER_PRAGER = int(YieldModel.DRUCKER_PRAGER)
+
+STRESS_FIELDS = {
+    "stress_dev": FieldSpec(
+        N_SYM, np.float64, "soil deviatoric stress s at step n (eqs. 12-13)", Mirror.TENSOR
+    ),
+    "mean_stress": FieldSpec(
+        0, np.float64, "soil mean stress p, compression positive (eq. 17)", Mirror.SCALAR
+    ),
+}
+EPS_VP = FieldSpec(0, np.float64, "plastic volumetric strain (tension cracking, dilatancy psi)")
+
+
+@kernel
+def sqrt_j2(s0, s1, s2, s3, s4, s5):
+    """sqrt(J2) = sqrt(s:s / 2) for a deviatoric tensor in 6 components."""
+    return np.sqrt(0.5 * (s0 * s0 + s1 * s1 + s2 * s2) + s3 * s3 + s4 * s4 + s5 * s5)
+
+
+@kernel
+def _scaled(r, s0, s1, s2, s3, s4, s5):
+    """Radial scale-back of the deviatoric stress by r (seed eq. 16; Bui et al. 2008)."""
+    return r * s0, r * s1, r * s2, r * s3, r * s4, r * s5
+
+
+@kernel
+def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi):
+    """Admissible (p, s) from a trial state; returns (p, s0..s5, dvol, dcrack): dvol the plastic
+    volumetric strain increment (dilation positive), dcrack the part of it that is tension cracking.
+
+    The volumetric increment is what keeps p = K (rho/rho0 - 1 + eps_vp) incremental: a cracked
+    (stretched) particle restarts from the cut-off when recompressed, as in the rate form
+    dsigma/dt = K tr(eps) delta + ... of Bui et al. (2008), instead of carrying a tensile deficit
+    that makes loosened soil flow like a zero-pressure fluid. soil_stress_state puts the cracking
+    part into the density, not into eps_vp (see there).
+    Mohr-Coulomb (seed eq. 16): tension cut-off p >= -c / tan(phi) (no tensile strength of a
+    cohesionless soil), then s scaled by s_f / sqrt(J2) when sqrt(J2) > s_f = c + p tan(phi).
+    Drucker-Prager (Bui et al. 2008, f = alpha_phi I1 + sqrt(J2) - k_c, I1 = -3p):
+      tension cracking: p < -k_c / (3 alpha_phi) (beyond the apex) -> apex, s = 0;
+      otherwise f > 0 -> plastic multiplier dl = f / (G + 9 K alpha_phi alpha_psi) of the
+      non-associated potential g = alpha_psi I1 + sqrt(J2): sqrt(J2) -= G dl, p += 3 K alpha_psi dl
+      (plastic dilation 3 alpha_psi dl raises p in a confined state); lands on f = 0 exactly.
+    """
+    dvol = 0.0
+    dcrack = 0.0
+    if model == MOHR_COULOMB:
+        if tan_phi > 0.0 and p < -cohesion / tan_phi:
+            dvol = dcrack = (-cohesion / tan_phi - p) / bulk
+            p = -cohesion / tan_phi
+        sf = max(cohesion + p * tan_phi, 0.0)
+        j = sqrt_j2(s0, s1, s2, s3, s4, s5)
+        if j > sf:
+            s0, s1, s2, s3, s4, s5 = _scaled(sf / j, s0, s1, s2, s3, s4, s5)
+    elif model == DRUCKER_PRAGER:
+        p_apex = -k_c / (3.0 * alpha_phi) if alpha_phi > 0.0 else -1e300
+        if p < p_apex:
+            dvol = dcrack = (p_apex - p) / bulk
+            p = p_apex
+            s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+        else:
+            j = sqrt_j2(s0, s1, s2, s3, s4, s5)
+            f = j - k_c - 3.0 * alpha_phi * p
+            if f > 0.0:
+                dl = f / (shear + 9.0 * bulk * alpha_phi * alpha_psi)
+                p += 3.0 * bulk * alpha_psi * dl
+                dvol = 3.0 * alpha_psi * dl
+                s0, s1, s2, s3, s4, s5 = _scaled(max(j - shear * dl, 0.0) / j, s0, s1, s2, s3, s4, s5)
+    return p, s0, s1, s2, s3, s4, s5, dvol, dcrack
+
+
+@kernel(parallel=True)
+def soil_stress_state(
+    rows,
+    rho,
+    s,
+    material,
+    rho0,
+    bulk,
+    shear,
+    tan_phi,
+    cohesion,
+    alpha_phi,
+    k_c,
+    alpha_psi,
+    yield_model,
+    mean_stress,
+    eps_vp=None,
+    update_history=False,
+):
+    """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
+    return mapping; writes p to mean_stress and the admissible s in place. With
+    update_history (after the leap-frog kick, on the half-step density) the plastic dilation
+    (psi) is accumulated in eps_vp, and tension cracking resets the density instead:
+        rho <- rho + rho0 dcrack,   i.e. rho = rho0 (1 + p_cut / K - eps_vp),
+    the density at which eq. (17) gives the cut-off pressure p_cut. A crack opens between
+    particles; the material keeps the density of its stress-free (cut-off) state. Carried in
+    eps_vp instead (as before issue 14), the crack opening let a detached grain's density fall
+    without bound: continuity (seed eq. 6) keeps lowering it while neighbours recede, and the
+    cut-off keeps p = p_cut whatever rho is. At rho -> 0 the particle's volume m/rho and
+    sigma/rho^2 grow without bound, and at rho_i + rho_j < 0 the artificial viscosity
+    (eq. 19, 2 / (rho_i + rho_j)) pulls a particle into its image instead of resisting: the
+    issue-14 column collapses ended so. p evolves exactly as before (continuity's rate does not
+    depend on rho_i); only the density used as a volume and in eqs. (19), (20) changes."""
+    for t in prange(rows.shape[0]):
+        i = rows[t]
+        m = material[i]
+        e = rho[i] / rho0[m] - 1.0
+        if eps_vp is not None:
+            e += eps_vp[i]
+        p, a0, a1, a2, a3, a4, a5, dvol, dcrack = return_map(
+            bulk[m] * e,
+            s[i, 0],
+            s[i, 1],
+            s[i, 2],
+            s[i, 3],
+            s[i, 4],
+            s[i, 5],
+            yield_model[m],
+            bulk[m],
+            shear[m],
+            tan_phi[m],
+            cohesion[m],
+            alpha_phi[m],
+            k_c[m],
+            alpha_psi[m],
+        )
+        mean_stress[i] = p
+        s[i, 0] = a0
+        s[i, 1] = a1
+        s[i, 2] = a2
+        s[i, 3] = a3
+        s[i, 4] = a4
+        s[i, 5] = a5
+        if eps_vp is not None and update_history:
+            if dcrack > 0.0:  # tension cracking (dvol = dcrack): back to the cut-off density
+                rho[i] += rho0[m] * dcrack
+            else:  # plastic dilatancy (psi)
+                eps_vp[i] += dvol
+
+
+def yield_excess(rows, mean_stress, s, material, soil):
+    """f / (scale) for the given rows: > 0 means outside the yield surface (NumPy; diagnostics, tests)."""
+    m = material[rows]
+    p = mean_stress[rows]
+    ss = s[rows]
+    j = np.sqrt(
+        0.5 * (ss[:, 0] ** 2 + ss[:, 1] ** 2 + ss[:, 2] ** 2) + ss[:, 3] ** 2 + ss[:, 4] ** 2 + ss[:, 5] ** 2
+    )
+    model = soil.yield_model[m]
+    limit = np.where(
+        model == YieldModel.DRUCKER_PRAGER,
+        soil.k_c[m] + 3.0 * soil.alpha_phi[m] * p,
+        soil.cohesion[m] + soil.tan_phi[m] * p,
+    )
+    scale = np.maximum(np.abs(p), 1.0) * np.maximum(soil.tan_phi[m], 1e-3) + soil.cohesion[m]
+    return np.where(model == YieldModel.ELASTIC, -1.0, (j - limit) / scale)
+
+
+class Constitution:
+    """The per-material constants of eqs. (16)-(17), applied to the owned soil rows."""
+
+    def __init__(self, materials):
+        s = materials.soil
+        self.rho0 = materials.rho0
+        self.constants = (
+            s.bulk,
+            s.shear,
+            s.tan_phi,
+            s.cohesion,
+            s.alpha_phi,
+            s.k_c,
+            s.alpha_psi,
+            s.yield_model,
+        )
+        soil = materials.ids_of_phase(Phase.SOIL)
+        self.plastic = any(s.yield_model[k] != YieldModel.ELASTIC for k in soil)
+
+    def apply(self, ctx, rho, stress, update_history):
+        """p from rho (eq. 17) and the return mapping of `stress`, in place."""
+        ps = ctx.particles
+        soil_stress_state(
+            ctx.rows[Phase.SOIL],
+            ps[rho],
+            ps[stress],
+            ps["material"],
+            self.rho0,
+            *self.constants,
+            ps["mean_stress"],
+            ps["eps_vp"] if self.plastic else None,
+            update_history,
+        )
+
+
+class SoilStressState(Term):
+    """p (eq. 17) and the admissible s of every owned soil particle from the state at step n."""
+
+    name = "soil stress state"
+    stage = Stage.STATE
+
+    @classmethod
+    def build(cls, scene, materials):
+        return cls(scene, materials) if materials.has_phase(Phase.SOIL) else None
+
+    def __init__(self, scene, materials):
+        super().__init__()
+        self.constitution = Constitution(materials)
+        self.fields = dict(STRESS_FIELDS)
+        if self.constitution.plastic:
+            self.fields["eps_vp"] = EPS_VP
+        self.writes = ("mean_stress", "stress_dev")
+        c_max = float(materials.sound_speed[materials.ids_of_phase(Phase.SOIL)].max())
+        self.dt_limit = Constraint(
+            "soil sound",
+            "seed eq. (28), c = sqrt((K + 4G/3) / rho0)",
+            scene.numerics.cfl.sound * scene.h / c_max,
+        )
+        self.equations = (
+            Equation("mean stress", "seed eq. (17)"),
+            Equation("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager"),
+        )
+
+    def run(self, ctx):
+        self.constitution.apply(ctx, "rho", "stress_dev", False)
+
+    def derive(self, ctx):
+        self.constitution.apply(ctx, "rho", "stress_dev", False)
+
+
+class SoilReturnMapping(Term):
+    """The plastic return mapping of the new half-step stress, accumulating plastic dilation."""
+
+    name = "soil return mapping"
+    stage = Stage.AFTER_KICK
+
+    @classmethod
+    def build(cls, scene, materials):
+        return cls(materials) if materials.has_phase(Phase.SOIL) else None
+
+    def __init__(self, materials):
+        super().__init__()
+        self.constitution = Constitution(materials)
+        # tension cracking resets the half-step density (soil_stress_state)
+        self.writes = ("stress_dev_half", "mean_stress") + (
+            ("eps_vp", "rho_half") if self.constitution.plastic else ()
+        )
+        self.equations = (
+            Equation("return mapping of s at n+1/2", "seed eqs. (16), (27); Bui et al. (2008)"),
+        )
+
+    def run(self, ctx):
+        self.constitution.apply(ctx, "rho_half", "stress_dev_half", True)

@@ -1,0 +1,136 @@
+"""What a physics term is: a piece of the model that declares, as data, what it needs.
+
+A term is a class in one module of `solver/physics/`, registered by one line in
+`solver/physics/__init__.py`. Its class attributes and constructor declare
+
+  stage        when it runs in a step (Stage)
+  targets      pair terms: the phase whose rates it computes ...
+  neighbours   ... summing over neighbours of this phase (None: a particle-local term)
+  equations    what it computes and the source of each equation (printed by --explain)
+  fields       the particle fields it needs allocated
+  reads        fields it reads on ghost and image rows: they must be current before it runs
+               (the halo exchange and the image refresh are derived from these, never typed)
+  writes       fields it writes on owned rows (current nowhere else afterwards)
+  writes_everywhere  fields it computes on every row, ghosts and images included (never exchanged)
+  adds_to      rates it accumulates into (the step loop zeroes them before the rates stage)
+  integrates   (value, half-step value, rate) triples the leap-frog advances
+  dt_limit     its time-step constraint, if any: constant, or (constant_dt None) dt_now(ctx) each step
+
+and its methods do the work on a TermContext. `build(scene, materials)` returns the term, or
+None when the scene does not call for it: then it is not compiled, allocated, exchanged or run.
+Terms never see MPI: the step loop exchanges what they declare.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from .materials import MaterialTable, Phase
+from .particles import FieldSpec
+from .scene import Scene
+from .timestep import Constraint
+
+
+class Stage(Enum):
+    """Where in a step a term runs, in step order."""
+
+    REBUILD = "at each neighbour rebuild"
+    STATE = "the state at step n: pressures, stresses (per particle or from neighbour sums)"
+    RATES = "the rates at step n, from neighbour sums"
+    AFTER_RATES = "after the rates"
+    AFTER_KICK = "after the leap-frog kick, on the half-step values"
+    AFTER_DRIFT = "after the drift, on x at n+1 and v at n+1/2"
+
+
+@dataclass(frozen=True)
+class Equation:
+    what: str
+    source: str
+
+
+@dataclass(frozen=True)
+class Integrated:
+    """A field the leap-frog advances: value at n, value at n+1/2, and its rate (seed eqs. 24-27)."""
+
+    value: str
+    half: str
+    rate: str
+
+
+class Term:
+    """Base class: a term that does nothing, needs nothing and exists in no plan."""
+
+    name: str = "term"
+    stage: Stage = Stage.STATE
+    targets: Phase | None = None
+    neighbours: Phase | None = None
+
+    def __init__(self):
+        self.equations: tuple[Equation, ...] = ()
+        self.fields: dict[str, FieldSpec] = {}
+        self.reads: tuple[str, ...] = ()
+        self.writes: tuple[str, ...] = ()
+        self.writes_everywhere: tuple[str, ...] = ()
+        self.adds_to: tuple[str, ...] = ()
+        self.integrates: tuple[Integrated, ...] = ()
+        self.dt_limit: Constraint | None = None
+        self.position_correction: str | None = None  # a field added to v in the drift (XSPH, eq. 22)
+
+    @classmethod
+    def build(cls, scene: Scene, materials: MaterialTable) -> Term | None:
+        """The term configured for this scene, or None if the scene does not call for it."""
+        raise NotImplementedError
+
+    @property
+    def pair(self) -> tuple[Phase, Phase] | None:
+        """(targets, neighbours) of a pair term, else None."""
+        return (self.targets, self.neighbours) if self.neighbours is not None else None
+
+    def run(self, ctx: TermContext) -> None:
+        """Do the term's work at its stage."""
+
+    def derive(self, ctx: TermContext) -> None:
+        """Bring fields derived from the state (pressure, stress) to the current time on owned
+        rows, for output. Only terms that own such fields override it."""
+
+    def dt_now(self, ctx: TermContext) -> float:
+        """A state-dependent dt limit (dt_limit.constant_dt is None), after the rates stages."""
+        return np.inf
+
+    def on_rebuild(self, ctx: TermContext) -> None:
+        """Called after every neighbour rebuild (after the halo is built)."""
+
+    def explain(self) -> list[str]:
+        """Extra lines for --explain (options in force)."""
+        return []
+
+
+@dataclass
+class TermContext:
+    """What a term sees of a running simulation: particles, neighbour lists, the geometry of
+    the kernel and the time step. Filled in by the Simulation; no communicator in it."""
+
+    particles: object
+    h: float
+    norm: float  # kernel normalisation a_d
+    is3d: object  # True in 3D, None in 2D: a compile-time switch for the kernels
+    gravity: np.ndarray
+    dt: float = 0.0  # the current step (set before the kick)
+    dt_prev: float = 0.0  # the previous step
+    lists: dict = field(default_factory=dict)  # (targets, neighbours) -> NeighbourList
+    rows: dict = field(default_factory=dict)  # Phase -> owned rows of that phase (int64)
+    images: object = None  # the wall-image term, if the scene has walls
+    shared: dict = field(default_factory=dict)  # per-step values one term leaves for another
+
+    def neighbours(self, term: Term):
+        return self.lists[term.pair]
+
+    def image_tables(self):
+        """(source rows, axis signs, offsets) of the current images; empty without walls."""
+        if self.images is None:
+            dim = self.particles.dim
+            return np.zeros(0, np.int64), np.zeros((0, dim)), np.zeros((0, dim))
+        return self.images.tables()

@@ -1,0 +1,46 @@
+"""Slow NumPy twin of solver/physics/density_diffusion.py, written from the equations:
+all-pairs loops over explicit neighbour lists, full matrices, np.linalg.inv.
+
+  D_i = delta h c0 sum_j psi_ij . grad_i W_ij V_j                       (Antuono et al. 2010, eq. 6)
+  psi_ij = 2 [(rho_j - rho_i) - (rho^H_j - rho^H_i)] x_ji / |x_ji|^2
+           - (<grad rho>_i^L + <grad rho>_j^L)                           (eq. 7; Fourtakas et al. 2019)
+  <grad rho>_i^L = sum_j (rho_j - rho_i) L_i grad_i W_ij V_j,
+  L_i = [sum_j x_ji (x) grad_i W_ij V_j]^-1                              (eq. 8)
+"""
+
+import numpy as np
+from naive import grad_w
+
+
+def renormalised_gradient(targets, x, rho, mass, h, dim, nbr_lists):
+    out = np.zeros((len(x), dim))
+    for t, i in enumerate(targets):
+        m = np.zeros((dim, dim))
+        u = np.zeros(dim)
+        for j in nbr_lists[t]:
+            gw = grad_w(x[i], x[j], h, dim)
+            vj = mass[j] / rho[j]
+            m += np.outer(x[j] - x[i], gw) * vj
+            u += (rho[j] - rho[i]) * gw * vj
+        out[i] = np.linalg.solve(m.T, u)  # L applied as in eq. 8: g = (M^T)^-1 u (M is symmetric here)
+    return out
+
+
+def density_diffusion(targets, x, rho, mass, c0, delta, h, dim, nbr_lists, rho_ref=None, grad_rho=None):
+    out = np.zeros(len(x))
+    ref = np.zeros(len(x)) if rho_ref is None else rho_ref
+    for t, i in enumerate(targets):
+        total = 0.0
+        for j in nbr_lists[t]:
+            xji = x[j] - x[i]
+            psi = 2.0 * ((rho[j] - rho[i]) - (ref[j] - ref[i])) * xji / np.dot(xji, xji)
+            if grad_rho is not None:
+                psi = psi - (grad_rho[i] + grad_rho[j])
+            total += np.dot(psi, grad_w(x[i], x[j], h, dim)) * mass[j] / rho[j]
+        out[i] = delta * h * c0 * total
+    return out
+
+
+def hydrostatic_density(z, level, rho0, b, gamma, g):
+    """Inverse Tait law (seed eq. 9) of p = rho0 g (level - z)."""
+    return rho0 * (1.0 + rho0 * g * (level - z) / b) ** (1.0 / gamma)

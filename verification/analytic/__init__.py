@@ -1,0 +1,1 @@
+"""Closed-form references for the verification cases (NumPy only; no solver imports)."""
