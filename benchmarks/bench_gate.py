@@ -107,18 +107,23 @@ def test_soil_step(benchmark):
     record(benchmark, f"soil step, column collapse, {n} particles, 1 thread", "s", *times, particles=n)
 
 
-def seepage_term_exists():
-    """The two-phase benchmark waits for a seepage (soil-water) term in the solver."""
-    return any((ROOT / "solver").rglob("seepage*.py"))
+N_TWO_PHASE = 3_750  # dx = 4 mm: 1,250 soil, 1,250 pore water, 1,250 pond
 
 
 def test_two_phase_step(benchmark):
-    """Placeholder hook: skips until a seepage term exists, then fails until it is written."""
-    if not seepage_term_exists():
-        pytest.skip("two-phase coupling not built yet")
-    pytest.fail(
-        "a seepage term exists: write the two-phase step benchmark here (saturated soil under water, "
-        "~25k particles, disordered, 1 thread) and rerun `python -m benchmarks.gate baseline`"
+    """One step of a saturated bed under a pond (seepage coupling, mixture formulation)."""
+    from saturated_bed_setup import saturated_bed
+
+    numba.set_num_threads(1)
+    sim = saturated_bed(N_TWO_PHASE)
+    times = interleaved(benchmark, sim.step, ROUNDS, sim.particles.n_owned)
+    n = sim.particles.n_owned
+    record(
+        benchmark,
+        f"two-phase step, saturated bed under a pond, {n} particles (soil, pore water, pond), 1 thread",
+        "s",
+        *times,
+        particles=n,
     )
 
 

@@ -25,9 +25,9 @@ from .run_case import jsonable
 
 
 def select_cases(args):
-    from verification.registry import CASES
+    from verification.registry import CASES, NIGHTLY_CASES
 
-    cases = dict(CASES)
+    cases = {**CASES, **NIGHTLY_CASES}
     for spec in args.case:
         name, _, module = spec.partition("=")
         if not name or not module:
