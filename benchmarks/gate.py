@@ -3,19 +3,22 @@
     python benchmarks/gate.py check [--json SUMMARY] [--baseline FILE]     exit 1 on a regression
     python benchmarks/gate.py baseline [--runs 10]                          write the baseline
     python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
+    python benchmarks/gate.py loo [--from-raw FILE]         each baseline run judged by the others
 
 `check` runs benchmarks/bench_gate.py under pytest-benchmark once and compares each benchmark's
 ratio (its time / the calibration kernel's, measured interleaved in the same run; see
 bench_gate.py and calibration.py) with the baseline. A benchmark regressed when its ratio is
-more than `threshold` (relative) above the baseline's mean ratio.
+more than `threshold` (relative) above the baseline's median ratio in its first run and in
+RETRIES re-measurements of it alone.
 
 The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
-suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their mean,
-standard deviation and largest deviation, and threshold = MULTIPLE x relative standard
-deviation, at least FLOOR (the floor is for a quantity with almost no spread, the memory per
-particle). `repeat` runs `check` RUNS times, optionally with the controlled slowdown of
-benchmarks/slowdown.py, and tabulates the verdicts: an unchanged build must pass every run,
-a 10 % slowdown must be caught (docs/benchmarks.md has the figures).
+suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their median and
+MAD-based relative standard deviation (and the plain one and the largest deviation), and
+threshold = MULTIPLE x the MAD-based spread, at least FLOOR (the floor is for a quantity with
+almost no spread, the memory per particle). `repeat` runs `check` RUNS times, optionally with
+the controlled slowdown of benchmarks/slowdown.py, and tabulates the verdicts: an unchanged
+build must pass every run, a 10 % slowdown must be caught; `loo` judges each baseline run by a
+baseline of the others (docs/benchmarks.md has the figures).
 """
 
 from __future__ import annotations
@@ -380,6 +383,40 @@ def write_baseline(args, runs):
     return 0
 
 
+def leave_one_out(runs, estimator):
+    """The gate on each baseline run of an unchanged build, judged by a baseline of the other
+    runs (same rule, no re-measurement): [(run index, {benchmark: change}, [flagged])]."""
+    out = []
+    for k, run in enumerate(runs):
+        others = [r for j, r in enumerate(runs) if j != k]
+        changes, flagged = {}, []
+        for name, info in run["found"].items():
+            values = [ratio_of(r["found"][name], estimator) for r in others if name in r["found"]]
+            if len(values) < 2:
+                continue
+            sp = spread(values)
+            threshold = max(MULTIPLE * sp["mad_rel"], FLOOR)
+            changes[name] = ratio_of(info, estimator) / sp["median"] - 1
+            if changes[name] > threshold:
+                flagged.append(name)
+        out.append((k, changes, flagged))
+    return out
+
+
+def cmd_loo(args):
+    runs = [json.loads(line) for line in Path(args.from_raw).read_text().splitlines() if line.strip()]
+    est = args.estimator or (load_baseline(args.baseline) or {}).get("estimator", DEFAULT_ESTIMATOR)
+    result = leave_one_out(runs, est)
+    for k, changes, flagged in result:
+        print(
+            f"run {k + 1}/{len(runs)} against the other {len(runs) - 1} ({est}): "
+            + ", ".join(f"{n} {c:+.1%}{'!' if n in flagged else ''}" for n, c in changes.items())
+        )
+    bad = sum(1 for _, _, f in result if f)
+    print(f"{bad} of {len(runs)} unchanged runs flagged by a baseline of the others (no re-measurement)")
+    return 0
+
+
 def cmd_repeat(args):
     baseline = load_baseline(args.baseline)
     if baseline is None:
@@ -419,7 +456,7 @@ def cmd_repeat(args):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
-    for name in ("check", "baseline", "repeat"):
+    for name in ("check", "baseline", "repeat", "loo"):
         p = sub.add_parser(name)
         p.add_argument(
             "--baseline", default=str(BASELINE), help=f"baseline file (default {BASELINE.relative_to(ROOT)})"
@@ -429,6 +466,9 @@ def main(argv=None):
             choices=list(ESTIMATORS),
             help=f"ratio estimator (default: the baseline's choice, else {DEFAULT_ESTIMATOR})",
         )
+        if name == "loo":
+            p.add_argument("--from-raw", default=str(RAW), help=f"raw baseline runs (default {RAW.relative_to(ROOT)})")
+            continue
         if name != "baseline":
             p.add_argument(
                 "--slowdown", type=float, help="inject a controlled slowdown (fraction, e.g. 0.10)"
@@ -445,7 +485,8 @@ def main(argv=None):
         if name == "repeat":
             p.add_argument("--out", help="write every run's summary here (JSON)")
     args = ap.parse_args(argv)
-    return {"check": cmd_check, "baseline": cmd_baseline, "repeat": cmd_repeat}[args.command](args)
+    commands = {"check": cmd_check, "baseline": cmd_baseline, "repeat": cmd_repeat, "loo": cmd_loo}
+    return commands[args.command](args)
 
 
 if __name__ == "__main__":

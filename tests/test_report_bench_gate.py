@@ -33,7 +33,7 @@ def _run(ratio, ratio_cpu=None):
     }
     info = {"what": "w", "value": ratio, "value_cpu": ratio_cpu, "unit": "s", "rounds": rounds}
     missing = {
-        "two_phase_step": "skipped: two-phase coupling not built yet",
+        "two_phase_step": "skipped: not built yet",
         "soil_step": "failed: see the output",
     }
     return {"found": {"water_step": info}, "missing": missing}
@@ -110,3 +110,12 @@ def test_a_flag_is_confirmed_by_re_measuring(monkeypatch):
         s, _ = gate.gated_run(BASE, ROOT / "benchmarks" / "baselines" / "gate.json", estimator="wall")
         row = next(r for r in s["benchmarks"] if r["name"] == "water_step")
         assert row["regressed"] is flagged and row["attempts"] == attempts
+
+
+def test_leave_one_out_judges_each_unchanged_run_by_the_others():
+    """Nine runs within 1 % and one 10 % slower: only that one is flagged by the others' baseline
+    (MAD-based spread 0.74 % -> threshold 3.0 %)."""
+    ratios = [1.0, 1.01, 0.99, 1.005, 0.995, 1.0, 1.01, 0.99, 1.0, 1.1]
+    result = gate.leave_one_out([_run(r) for r in ratios], "wall")
+    assert [k for k, _, flagged in result if flagged] == [9]
+    assert abs(result[9][1]["water_step"] - 0.1) < 1e-12

@@ -23,6 +23,7 @@ from . import stability_matrix as M
 from .common import CaseResult, Check, save_figure
 
 DEFAULT_RESOLUTION = 600  # budget: millions of estimated particle-steps (~10 CPU min on this host)
+QUICK_RESOLUTION = 0  # `scoursph report --quick`: the CI subset and the known failures only
 NIGHTLY_NOTE = (
     "The 'resolution' of this case is its budget in millions of estimated particle-steps: the CI "
     "subset, the known failures and the cheapest other cells within it; the rest of the matrix is "

@@ -109,6 +109,7 @@ def cost_figure(case, rows, columns, references=()):
     return png(fig)
 
 
+LEGEND_MAX = 12  # more metrics than this: the legend names only those out of band or flagged tonight
 CLIP = 3.0  # value / tolerance beyond this is drawn at the edge: the pass band stays readable
 
 
@@ -131,9 +132,12 @@ def metric_trend_figure(case, history, keys, flagged=()):
     fig, ax = plt.subplots(figsize=(10, 3.2))
     dates = [h.get("date", "")[:16] for h in history]
     xs = range(len(history))
+    many = len(keys) > LEGEND_MAX  # e.g. the stability matrix: three metrics per cell
     for k, key in enumerate(keys):
         ys = [scaled(h.get("metrics", {}).get(key)) for h in history]
-        ax.plot(xs, ys, "o-", ms=3, color=f"C{k % 10}", label=key.split(" :: ", 1)[1][:70])
+        shown = not many or key in flagged or (ys and not abs(ys[-1]) <= 1)  # NaN counts as out of band
+        label = key.split(" :: ", 1)[1][:70] if shown else None
+        ax.plot(xs, ys, "o-", ms=3, color=f"C{k % 10}", label=label, alpha=1.0 if shown else 0.35)
         if key in flagged and ys:
             ax.plot([len(ys) - 1], [ys[-1]], "o", ms=10, mfc="none", mec="red", mew=2)
     ax.axhspan(-1, 1, color="green", alpha=0.07, lw=0)
@@ -146,7 +150,13 @@ def metric_trend_figure(case, history, keys, flagged=()):
         fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    if many:
+        ax.text(
+            0.01, 0.02, f"{len(keys)} metrics; the legend names those out of band or flagged tonight",
+            transform=ax.transAxes, fontsize=6,
+        )
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     return png(fig)
 

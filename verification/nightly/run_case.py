@@ -79,7 +79,7 @@ def plan(mod, resolution=None, study=None, no_study=False, quick=False):
     """(resolution, study resolutions or None) for a case module (docs/nightly_report.md)."""
     study_default = getattr(mod, "NIGHTLY_STUDY_RESOLUTIONS", getattr(mod, "STUDY_RESOLUTIONS", None))
     if quick:
-        smallest = min(study_default) if study_default else None
+        smallest = getattr(mod, "QUICK_RESOLUTION", min(study_default) if study_default else None)
         return resolution or smallest or getattr(mod, "DEFAULT_RESOLUTION", None), None
     if resolution is None:
         resolution = getattr(mod, "NIGHTLY_RESOLUTION", getattr(mod, "DEFAULT_RESOLUTION", None))
