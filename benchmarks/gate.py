@@ -467,7 +467,9 @@ def main(argv=None):
             help=f"ratio estimator (default: the baseline's choice, else {DEFAULT_ESTIMATOR})",
         )
         if name == "loo":
-            p.add_argument("--from-raw", default=str(RAW), help=f"raw baseline runs (default {RAW.relative_to(ROOT)})")
+            p.add_argument(
+                "--from-raw", default=str(RAW), help=f"raw baseline runs (default {RAW.relative_to(ROOT)})"
+            )
             continue
         if name != "baseline":
             p.add_argument(

@@ -182,7 +182,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
         old = committed_outcomes()
         res.tables.append(
             {
-                "title": f"Cells left out tonight (budget {resolution} M particle-steps), with the outcome of "
+                "title": f"Cells left out tonight (budget {resolution} M particle-steps), outcome in "
                 f"the committed full-matrix table ({COMMITTED.relative_to(M.ROOT)})",
                 "header": [
                     "cell",

@@ -195,7 +195,7 @@ def bench_section(bench):
         f"{esc(bench.get('baseline_source', ''))}. The ratio divides a benchmark's time by the calibration "
         "kernel timed interleaved with it (benchmarks/calibration.py); the gate compares ratios, not "
         f"times (estimator: {esc(bench.get('estimator', '?'))}; docs/benchmarks.md). A benchmark past its "
-        "gate is measured again alone, up to twice (attempts), and fails only if every attempt is past it.</p>"
+        "gate is measured again alone, up to twice (attempts), and fails only if every attempt is past.</p>"
     )
     return head + table(
         [

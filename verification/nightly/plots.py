@@ -152,8 +152,11 @@ def metric_trend_figure(case, history, keys, flagged=()):
     ax.grid(alpha=0.3)
     if many:
         ax.text(
-            0.01, 0.02, f"{len(keys)} metrics; the legend names those out of band or flagged tonight",
-            transform=ax.transAxes, fontsize=6,
+            0.01,
+            0.02,
+            f"{len(keys)} metrics; the legend names those out of band or flagged tonight",
+            transform=ax.transAxes,
+            fontsize=6,
         )
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
