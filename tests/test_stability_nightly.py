@@ -53,3 +53,19 @@ def test_the_nightly_lists_the_matrix():
 
     assert NIGHTLY_CASES["stability_matrix"] == "verification.stability_nightly"
     assert "stability_matrix" not in CASES  # `scoursph verify all` leaves it out
+
+
+def test_a_night_of_one_tiny_cell_gives_checks_tables_and_a_figure(monkeypatch, tmp_path):
+    """run() end to end on a stubbed night: a block dropped for 0.02 s at dx = 10 mm (before it
+    lands), a placeholder, and one cell left out."""
+    tiny = M.Cell("tiny_drop", "block_drop", lambda: (M.block_drop_scene(0.01, 0.02), M._drop), 0.02)
+    later = M.Cell("later", "x", placeholder="not built yet")
+    monkeypatch.setattr(S, "tonight", lambda budget: ([later, tiny], [(M.Cell("dear", "f"), 5e6)]))
+    res = S.run(0, tmp_path)
+    assert [c.metric for c in res.checks] == [S.metric("tiny_drop", w) for w in (S.END, S.WALL, S.ENERGY)]
+    assert all(c.passed for c in res.checks), [c.line() for c in res.checks]
+    run_table, left_table = res.tables
+    assert [r[0] for r in run_table["rows"]] == ["later", "tiny_drop"]
+    assert run_table["rows"][1][1] == "pass" and len(run_table["rows"][1]) == len(run_table["header"])
+    assert left_table["rows"][0][:2] == ["dear", 5.0]
+    assert res.figure.exists() and (tmp_path / "matrix_tonight.md").exists()

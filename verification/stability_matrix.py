@@ -259,7 +259,7 @@ def cells():
 def energies(sim):
     """(kinetic, potential, elastic) energy of the owned particles at the current time, J (per m in 2D).
     Call after sim.current_state() (whole-step velocities, stresses and pressures)."""
-    from solver.materials import PHASE_SOIL, PHASE_WATER
+    from solver.materials import Phase
 
     ps = sim.particles
     n = ps.n_owned
@@ -271,7 +271,7 @@ def energies(sim):
     phase = mats.phase[mat]
     rho = ps["rho"][:n]
     el = 0.0
-    soil = phase == PHASE_SOIL
+    soil = phase == Phase.SOIL
     if soil.any():  # linear elastic energy density p^2 / 2K + J2 / 2G (seed eqs. 13, 17)
         s = ps["stress_dev"][:n][soil]
         j2 = 0.5 * np.sum(s[:, :3] ** 2, axis=1) + np.sum(s[:, 3:] ** 2, axis=1)
@@ -279,7 +279,7 @@ def energies(sim):
         g = mats.soil.shear[mat[soil]]
         p = ps["mean_stress"][:n][soil]
         el += float(np.sum(m[soil] / rho[soil] * (p**2 / (2 * k) + j2 / (2 * g))))
-    water = phase == PHASE_WATER
+    water = phase == Phase.WATER
     if water.any():  # Tait (seed eq. 9): e(rho) = int_rho0^rho p / rho'^2 drho' >= 0
         mw = mat[water]
         r0, b, gam = mats.rho0[mw], mats.eos_b[mw], mats.eos_exponent[mw]
