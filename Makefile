@@ -5,8 +5,9 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 SCENE  ?= scenes/scour_saturated.toml
 OUT    ?= runs/scour_saturated
+NIGHTLY ?= runs/nightly
 
-.PHONY: run test lint format bench verify references clean
+.PHONY: run test lint format bench bench-check bench-baseline nightly verify references clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +38,23 @@ format: $(STAMP)
 ## make bench: performance benchmarks (pytest-benchmark), results in .benchmarks/
 bench: $(STAMP)
 	$(BIN)/python -m pytest benchmarks -q --benchmark-only --benchmark-autosave -p no:cacheprovider -o addopts="" -o python_files="bench_*.py" -s
+
+## make bench-check: the benchmark regression gate (ratios to a calibration kernel timed alongside;
+## benchmarks/gate.py, docs/benchmarks.md); exit status 1 on a regression
+bench-check: $(STAMP)
+	$(BIN)/python benchmarks/gate.py check --json $(NIGHTLY)/bench-latest.json
+
+## make bench-baseline: re-measure the gate's baseline and thresholds (10 runs of the gate suite)
+bench-baseline: $(STAMP)
+	$(BIN)/python benchmarks/gate.py baseline --runs 10
+
+## make nightly: the benchmark gate, then every verification case and its study (scoursph report):
+## $(NIGHTLY)/<date>/index.html and results.json, $(NIGHTLY)/latest; exit 1 on a failure or regression
+nightly: $(STAMP)
+	@rm -f $(NIGHTLY)/bench-latest.json; status=0; \
+	$(BIN)/python benchmarks/gate.py check --json $(NIGHTLY)/bench-latest.json || status=1; \
+	$(BIN)/scoursph report --out $(NIGHTLY) --bench-json $(NIGHTLY)/bench-latest.json || status=1; \
+	exit $$status
 
 ## make verify: every verification case at its default resolution
 verify: $(STAMP)

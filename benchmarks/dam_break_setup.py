@@ -11,10 +11,13 @@ from verification.common import scene_from_file
 A = 0.05715
 
 
-def dam_break(n_particles, **overrides):
+def dam_break_scene(n_particles, **overrides):
     per_a = int(round(np.sqrt(n_particles / 2)))
-    sim = Simulation(scene_from_file("dam_break_2d.toml", **{"scene.spacing": A / per_a, **overrides}))
-    return disordered(sim)
+    return scene_from_file("dam_break_2d.toml", **{"scene.spacing": A / per_a, **overrides})
+
+
+def dam_break(n_particles, **overrides):
+    return disordered(Simulation(dam_break_scene(n_particles, **overrides)))
 
 
 def disordered(sim, seed=1):

@@ -1,4 +1,4 @@
-"""The command line: `scoursph run SCENE`, `scoursph verify CASE`.
+"""The command line: `scoursph run SCENE`, `scoursph verify CASE`, `scoursph report`.
 
 Exit status: 0 success, 1 numerical blow-up (outputs so far are kept) or a failed
 verification check, 2 bad input (scene file, option, output directory or restart; nothing
@@ -90,6 +90,9 @@ def _parser():
     )
     v.add_argument("--out", type=Path, default=Path("runs/verification"))
     v.add_argument("--quiet", action="store_true")
+    from verification.nightly.options import add_arguments as add_report_arguments
+
+    add_report_arguments(sub.add_parser("report", help="nightly verification report: HTML page + JSON"))
     return p
 
 
@@ -111,6 +114,10 @@ def main(argv=None):
         numba.set_num_threads(args.threads)
     if args.command == "run":
         return _run(args)
+    if args.command == "report":
+        from verification.nightly.report import main as report
+
+        return report(args)
     return _verify(args)
 
 

@@ -68,13 +68,14 @@ from .common import (
     SCENES,
     CaseResult,
     Check,
+    load_1min,
     machine_load,
     reference_case_dir,
     report,
     richardson,
     save_figure,
     study_row,
-    timed_samples,
+    timed_run,
     write_csv,
 )
 
@@ -96,6 +97,12 @@ STUDY_FILE = OUT / "resolution_study.csv"
 DIGITISATION = 0.003  # m, CSV header
 FAILURE_THRESHOLD = 0.005  # m: "moved less than" for the undisturbed zone
 METRICS = ("runout", "wall_height", "profile", "failure")
+# Checks expected to fail until the model changes (the nightly report shows them as known
+# failures and flags them if they pass, like the strict xfail in tests/test_verification.py)
+KNOWN_FAILURES = {
+    "failure-line RMS error in x (m)": "the SPH undisturbed-zone boundary lies ~1 cm from the experiment's "
+    "failure line and the error grows with refinement (verification/results/column_collapse/README.md)",
+}
 
 
 def spacing(resolution):
@@ -200,7 +207,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
 
     start = create_particles(scene, build_plan(scene))  # initial positions, by id
     x0 = start["x"][: start.n_owned][np.argsort(start["id"][: start.n_owned])].copy()
-    sim, ke, wall = timed_samples(scene, times, observe)
+    sim, ke, wall, cpu = timed_run(scene, times, observe)
     ps = sim.particles
     n = ps.n_owned
     x = ps["x"][:n][np.argsort(ps["id"][:n])]
@@ -227,7 +234,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, end_time=None, overrides=No
     }
     ref = load_reference()
     series.update(errors(series, ref))
-    res = CaseResult("column_collapse", resolution, n, sim.step_count, wall, series)
+    res = CaseResult("column_collapse", resolution, n, sim.step_count, wall, series, cpu_time=cpu)
     res.checks = checks(res, ref)
     res.notes = [
         f"dx = {dx * 1000:g} mm, runout {series['runout']:.4f} m (experiment "
@@ -478,50 +485,61 @@ def extrapolation_text(rows, experiment):
 
 
 def accuracy_cost_figure(rows, experiment_runout, path):
-    """What accuracy costs in time: |runout error| and failure-line RMS against wall time, one
-    point per spacing of the study, with the tolerance-free reference lines (digitisation,
-    Richardson limit)."""
+    """What accuracy costs in time: |runout error| and failure-line RMS against wall time and
+    against CPU time, one point per spacing of the study, with the tolerance-free reference lines
+    (digitisation, Richardson limit). CPU time survives a loaded host; wall time does not."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    wall = np.array([float(r["wall_time_s"]) for r in rows])
     dx = [float(r["spacing_mm"]) for r in rows]
     runout = np.abs(np.array([float(r["runout_m"]) for r in rows]) - experiment_runout) * 1000
     failure = np.array([float(r["failure_rms_mm"]) for r in rows])
-    fig, ax = plt.subplots(figsize=(5.5, 3.6))
-    ax.plot(wall, runout, "o-", label="|runout - experiment|")
-    ax.plot(wall, failure, "s-", label="failure-line RMS")
-    for w, d, a, b in zip(wall, dx, runout, failure):
-        ax.annotate(f"{d:g} mm", (w, max(a, b)), textcoords="offset points", xytext=(4, 4), fontsize=7)
-    if rows[0].get("runout_extrapolated_m") not in (None, ""):
-        limit = abs(float(rows[0]["runout_extrapolated_m"]) - experiment_runout) * 1000
-        ax.axhline(limit, color="C0", ls=":", lw=1, label="runout error of the Richardson limit")
-    ax.axhline(1000 * DIGITISATION, color="k", ls="--", lw=0.8, label="digitisation (3 mm)")
-    ax.set(
-        xscale="log",
-        xlabel="wall time (s, one thread)",
-        ylabel="error (mm)",
-        title="Column collapse: error against cost",
-    )
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    for ax, key, name in zip(axs, ("wall_time_s", "cpu_time_s"), ("wall time", "CPU time")):
+        cost = np.array([float(r[key]) for r in rows])
+        ax.plot(cost, runout, "o-", label="|runout - experiment|")
+        ax.plot(cost, failure, "s-", label="failure-line RMS")
+        for w, d, a, b in zip(cost, dx, runout, failure):
+            ax.annotate(f"{d:g} mm", (w, max(a, b)), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        if rows[0].get("runout_extrapolated_m") not in (None, ""):
+            limit = abs(float(rows[0]["runout_extrapolated_m"]) - experiment_runout) * 1000
+            ax.axhline(limit, color="C0", ls=":", lw=1, label="runout error of the Richardson limit")
+        ax.axhline(1000 * DIGITISATION, color="k", ls="--", lw=0.8, label="digitisation (3 mm)")
+        ax.set(xscale="log", xlabel=f"{name} (s, one thread)", title=f"Column collapse: error against {name}")
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))  # 1-2-5 labels, plain
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.grid(alpha=0.3, which="both")
+    axs[0].set_ylabel("error (mm)")
+    axs[0].legend(fontsize=7)
     fig.tight_layout()
     return save_figure(fig, path, dpi=130)
+
+
+# The study columns the nightly report plots against wall and CPU time (docs/nightly_report.md)
+ACCURACY_COLUMNS = {
+    "runout_vs_extrapolated": "|runout - Richardson limit| (m)",
+    "runout_abs_error_m": "|runout - experiment| (m)",
+    "profile_rms_mm": "free-surface RMS vs experiment (mm)",
+    "failure_rms_mm": "failure-line RMS vs experiment (mm)",
+}
 
 
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     """Resolution study: metrics, their differences to the finest run (the discretisation
     errors the checks read) and wall time side by side; writes CSV + Markdown."""
     out = Path(out_dir)
-    results = []
+    results, loads = [], []
     for r in resolutions:
         res = run(r, out_dir=out)
         results.append(res)
+        loads.append(load_1min())
         print(
             f"resolution {r} (dx = {spacing(r) * 1000:g} mm): runout {res.series['runout']:.4f} m, "
-            f"wall height {res.series['wall_height']:.4f} m, wall time {res.wall_time:.0f} s",
+            f"wall height {res.series['wall_height']:.4f} m, wall time {res.wall_time:.0f} s, "
+            f"CPU time {res.cpu_time:.0f} s",
             flush=True,
         )
     ref = load_reference()
@@ -539,7 +557,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
         }
 
     rows = []
-    for res in results:
+    for res, load in zip(results, loads):
         s = res.series
         d = vs(s, second if s is fine else fine)
         rows.append(
@@ -549,7 +567,10 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                 "particles": res.particles,
                 "steps": res.steps,
                 "wall_time_s": res.wall_time,
+                "cpu_time_s": res.cpu_time,
+                "load_1min": load,
                 "runout_m": s["runout"],
+                "runout_abs_error_m": abs(s["runout_error"]),
                 "runout_error_pct": 100 * s["runout_error"] / float(surf[-1, 0]),
                 "wall_height_m": s["wall_height"],
                 "profile_rms_mm": 1000 * s["profile_rms"],
@@ -562,15 +583,16 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     write_csv(out / "resolution_study.csv", rows)
     lines = [
         "| dx (mm) | particles | steps | runout (m) | runout error | height at wall (m) | profile RMS (mm) | "
-        "failure-line RMS (mm) | runout vs finest (mm) | wall time (s) |",
-        "|" + "---|" * 10,
+        "failure-line RMS (mm) | runout vs finest (mm) | wall time (s) | CPU time (s) | load (1 min) |",
+        "|" + "---|" * 12,
     ]
     for r in rows:
         lines.append(
             f"| {r['spacing_mm']:g} | {r['particles']} | {r['steps']} | {r['runout_m']:.4f} | "
             f"{r['runout_error_pct']:+.1f} % | "
             f"{r['wall_height_m']:.4f} | {r['profile_rms_mm']:.1f} | {r['failure_rms_mm']:.1f} | "
-            f"{1000 * r['runout_vs_finest']:.1f} | {r['wall_time_s']:.0f} |"
+            f"{1000 * r['runout_vs_finest']:.1f} | {r['wall_time_s']:.0f} | {r['cpu_time_s']:.0f} | "
+            f"{r['load_1min']:.2f} |"
         )
     verdicts = []
     for res in results:
@@ -589,8 +611,9 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     text = (
         "# Column collapse (Bui et al. 2008): resolution study\n\n"
         f"Experiment: runout {surf[-1, 0]:.3f} m, height at wall {surf[0, 1]:.3f} m. Source: {SOURCE}.\n"
-        f"Wall time: stepping only (compile excluded), one process, NUMBA_NUM_THREADS="
-        f"{os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}.\n"
+        f"Wall and CPU time (time.process_time): stepping only (compile excluded), one process, "
+        f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}; "
+        "load (1 min) after each run in the table.\n"
         "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.column_collapse --study`\n\n"
         + "\n".join(lines)
         + "\n\n"

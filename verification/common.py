@@ -10,6 +10,7 @@ import time
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -57,6 +58,11 @@ class CaseResult:
     checks: list[Check] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     figure: Path | None = None
+    cpu_time: float | None = None  # CPU s of the stepping (all threads of the process), beside wall_time
+    # optional extras for the nightly report (docs/nightly_report.md): more figures, and tables
+    # as {"title": str, "header": [str], "rows": [[value]]}
+    extra_figures: list[Path] = field(default_factory=list)
+    tables: list[dict] = field(default_factory=list)
 
     @property
     def passed(self):
@@ -75,21 +81,47 @@ def scene_from_file(name, **overrides):
     return parse_scene(raw, SCENES / name)
 
 
-def timed_samples(scene, sample_times, observe):
+class Stopwatch:
+    """Wall time and CPU time since it was made. CPU time is time.process_time(): every thread
+    of this process, so a Numba run on 2 threads counts both; on a loaded host the wall time
+    grows with the load while the CPU time of a single-threaded run barely does."""
+
+    def __init__(self):
+        self.wall0, self.cpu0 = time.perf_counter(), time.process_time()
+
+    def read(self):
+        """(wall s, CPU s) so far."""
+        return time.perf_counter() - self.wall0, time.process_time() - self.cpu0
+
+
+class TimedRun(NamedTuple):
+    sim: Simulation
+    samples: list
+    wall: float  # s of stepping and observing, set-up and first-step compile excluded
+    cpu: float  # CPU s over the same span (Stopwatch)
+
+
+def timed_run(scene, sample_times, observe):
     """Run a scene in memory, calling observe(sim) at each sample time.
 
-    Returns (Simulation, list of observations, wall time in s, excluding set-up/compile of
-    the first step so that resolutions compare by their stepping cost)."""
+    Returns a TimedRun: the Simulation, the observations, and the wall and CPU time excluding
+    set-up and the compile of the first step, so that resolutions compare by their stepping cost."""
     sim = Simulation(scene)
     sim.step()  # compiles every kernel (cached on disk after the first process)
-    start = time.perf_counter()
+    clock = Stopwatch()
     out = []
     for t in sample_times:
         if t > sim.t:
             sim.advance_to(t)
         sim.current_state()
         out.append(observe(sim))
-    return sim, out, time.perf_counter() - start
+    wall, cpu = clock.read()
+    return TimedRun(sim, out, wall, cpu)
+
+
+def timed_samples(scene, sample_times, observe):
+    """(Simulation, observations, wall time): timed_run without the CPU time (kept for callers)."""
+    return tuple(timed_run(scene, sample_times, observe)[:3])
 
 
 def read_csv(name):
@@ -126,12 +158,32 @@ def write_csv(path, rows, fields=None):
     return path
 
 
-def save_study(rows, out_dir, stem):
-    """A resolution study's rows (dicts) as OUT/stem.csv (read back by the checks) and stem.md."""
+def save_study(rows, out_dir, stem, note=None):
+    """A resolution study's rows (dicts) as OUT/stem.csv (read back by the checks) and stem.md
+    (`note`, e.g. how the times were taken and the machine load, above the table)."""
     out = Path(out_dir)
     write_csv(out / f"{stem}.csv", rows)
     write_study_table(out / f"{stem}.md", list(rows[0]), [list(r.values()) for r in rows])
+    if note:
+        md = out / f"{stem}.md"
+        md.write_text(note.rstrip() + "\n\n" + md.read_text())
     return rows
+
+
+def timing_note(reproduce):
+    """How a study's times were taken, for the line above its table: CPU time beside wall time,
+    threads, and the machine load (wall times compare only at similar load; CPU times of a
+    one-thread run survive a loaded host much better)."""
+    return (
+        "Times: stepping only (set-up and compile excluded), one process, "
+        f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}; wall time and CPU time "
+        "(time.process_time, all threads) side by side; load_1min is the 1-minute load average "
+        f"after each run; {machine_load()}.\nReproduce: `{reproduce}`"
+    )
+
+
+def load_1min():
+    return os.getloadavg()[0]
 
 
 def study_row(path, resolution):

@@ -33,6 +33,7 @@ from .common import (
     CaseResult,
     Check,
     case_main,
+    load_1min,
     read_csv,
     reference_case_dir,
     rms,
@@ -40,7 +41,8 @@ from .common import (
     save_study,
     scene_from_file,
     study_row,
-    timed_samples,
+    timed_run,
+    timing_note,
 )
 
 A = 0.05715  # column width a (m), Martin & Moyce's 2.25 in column
@@ -74,10 +76,12 @@ def observe(sim):
 
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
     T = np.linspace(0.0, T_END, 121)
-    sim, obs, wall = timed_samples(scene(resolution, **overrides), T / T_SCALE, observe)
+    sim, obs, wall, cpu = timed_run(scene(resolution, **overrides), T / T_SCALE, observe)
     Z, H = np.array(obs).T
     series = {"T": T, "Z": Z, "tau": T / np.sqrt(2.0), "H": H}
-    res = CaseResult("dam_break", resolution, sim.particles.n_owned, sim.step_count, wall, series)
+    res = CaseResult(
+        "dam_break", resolution, sim.particles.n_owned, sim.step_count, wall, series, cpu_time=cpu
+    )
     res.checks = checks(res)
     if out_dir is not None:
         res.figure = figure(res, Path(out_dir) / f"dam_break_r{resolution}.png")
@@ -294,30 +298,89 @@ def figure(res, path):
     return save_figure(fig, path)
 
 
-def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
-    """Resolution study: errors and wall time side by side; writes the CSV the tolerances read."""
-    results = [run(r) for r in resolutions]
-    finest = results[-1].series
+def errors_vs_experiment(T, Z, tau, H):
+    """Errors against Martin & Moyce that need no time-origin calibration from another code, so
+    SPH runs and the OpenFOAM meshes can be put on the same accuracy-against-cost axes: raw RMS
+    of the front Z, |front speed dZ/dT - experiment's| (T 1.4-3.4), RMS of H/H0 at the wall."""
     Te, Ze = experiment_front()
     taue, He = experiment_height()
+    keep = taue <= tau.max()
+    inside = Te <= T.max()
+    return dict(
+        front_vs_experiment=rms(np.interp(Te[inside], T, Z) - Ze[inside]),
+        speed_vs_experiment=abs(front_speed(T, Z) - front_speed(Te, Ze)),
+        height_vs_experiment=rms(np.interp(taue[keep], tau, H) - He[keep]),
+    )
+
+
+# The study columns the nightly report plots against wall and CPU time (docs/nightly_report.md)
+ACCURACY_COLUMNS = {
+    "front_vs_finest": "front RMS vs finest run (Z)",
+    "front_vs_experiment": "front RMS vs Martin & Moyce, raw time origin (Z)",
+    "speed_vs_experiment": "|front speed - Martin & Moyce| (dZ/dT)",
+    "height_vs_experiment": "wall height RMS vs Martin & Moyce (H/H0)",
+}
+
+
+def reference_costs():
+    """The OpenFOAM meshes on the same accuracy-against-cost axes: the errors of
+    `errors_vs_experiment` from the reduced series (reference_cases/openfoam_dam_break_2d/data)
+    and the solver wall time from its manifest. The manifest records no CPU time. Its height at
+    the wall is volume-equivalent (module docstring), a different quantity from SPH's surface height."""
+    import json
+
+    manifest = OPENFOAM.parent / "manifest.json"
+    if not manifest.exists():
+        return []
+    runs = json.loads(manifest.read_text()).get("runs", {})
     rows = []
-    for res in results:
+    for cells, (Tf, Zf, Hf) in sorted(openfoam_series().items()):
+        run_ = runs.get(f"dx{cells}", {})
+        load = run_.get("host", {}).get("load_avg_at_end", [None])[0]
+        rows.append(
+            dict(
+                label=f"OpenFOAM interFoam a/{cells} ({run_.get('n_cells', '?')} cells)",
+                resolution=cells,
+                wall_time_s=run_.get("wall_time_solver_s"),
+                cpu_time_s=None,
+                load_1min=load,
+                **errors_vs_experiment(Tf, Zf, Tf / np.sqrt(2.0), Hf),
+            )
+        )
+    return rows
+
+
+def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
+    """Resolution study: errors beside wall and CPU time; writes the CSV the tolerances read."""
+    results, loads = [], []
+    for r in resolutions:
+        results.append(run(r))
+        loads.append(load_1min())
+    finest = results[-1].series
+    rows = []
+    for res, load in zip(results, loads):
         s = res.series
-        keep = taue <= s["tau"].max()
         rows.append(
             dict(
                 resolution=res.resolution,
                 particles=res.particles,
                 steps=res.steps,
                 wall_time_s=res.wall_time,
+                cpu_time_s=res.cpu_time,
+                particle_steps_per_cpu_s=res.particles * res.steps / res.cpu_time,
+                load_1min=load,
                 front_vs_finest=rms(s["Z"] - finest["Z"]),
                 height_vs_finest=rms(s["H"] - finest["H"]),
                 speed_vs_finest=abs(front_speed(s["T"], s["Z"]) - front_speed(finest["T"], finest["Z"])),
-                front_vs_experiment=rms(np.interp(Te, s["T"], s["Z"]) - Ze),
-                height_vs_experiment=rms(np.interp(taue[keep], s["tau"], s["H"]) - He[keep]),
+                **errors_vs_experiment(s["T"], s["Z"], s["tau"], s["H"]),
             )
         )
-    return save_study(rows, out_dir, "dam_break_study")
+    return save_study(
+        rows,
+        out_dir,
+        "dam_break_study",
+        note=timing_note("NUMBA_NUM_THREADS=1 python -m verification.dam_break --study"),
+    )
 
 
 if __name__ == "__main__":

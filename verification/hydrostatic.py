@@ -33,11 +33,13 @@ from .common import (
     CaseResult,
     Check,
     case_main,
+    load_1min,
     rms,
     save_figure,
     save_study,
     scene_from_file,
-    timed_samples,
+    timed_run,
+    timing_note,
 )
 from .probes import probe
 
@@ -69,7 +71,7 @@ def observe(sim):
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
     sc = scene(resolution, **overrides)
     times = np.linspace(0.0, sc.scene.end_time, 101)
-    sim, obs, wall = timed_samples(sc, times, observe)
+    sim, obs, wall, cpu = timed_run(sc, times, observe)
     probe_err = np.array([o[0] for o in obs])  # (time, gauge) error / (rho0 g H)
     mach = np.array([o[1] for o in obs])
     e_particle = np.array([o[2] for o in obs])
@@ -83,6 +85,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, **overrides):
         sim.step_count,
         wall,
         {"t": times, "pressure_error": e_p, "mach": mach, "particle_pressure_noise": e_particle},
+        cpu_time=cpu,
     )
     h_over_depth = sc.h / DEPTH
     res.checks = [
@@ -178,13 +181,27 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS):
                 particles=res.particles,
                 steps=res.steps,
                 wall_time_s=res.wall_time,
+                cpu_time_s=res.cpu_time,
+                load_1min=load_1min(),
                 mean_pressure_error=float(res.series["mean_pressure_error"]),
                 instantaneous_pressure_error=float(res.series["pressure_error"][-1]),
                 mach=float(res.series["mach"][-1]),
                 particle_pressure_noise=float(res.series["particle_pressure_noise"][-1]),
             )
         )
-    return save_study(rows, out_dir, "hydrostatic_study")
+    return save_study(
+        rows,
+        out_dir,
+        "hydrostatic_study",
+        note=timing_note("NUMBA_NUM_THREADS=1 python -m verification.hydrostatic --study"),
+    )
+
+
+# The study columns the nightly report plots against wall and CPU time (docs/nightly_report.md)
+ACCURACY_COLUMNS = {
+    "mean_pressure_error": "time-averaged gauge pressure error / (rho0 g H)",
+    "mach": "spurious speed / c at the end",
+}
 
 
 if __name__ == "__main__":

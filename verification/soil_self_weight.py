@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from .column_collapse import scene_at
-from .common import RESULTS, CaseResult, Check, machine_load, rms, study_row
+from .common import RESULTS, CaseResult, Check, Stopwatch, load_1min, machine_load, rms, study_row
 
 H = 0.2  # column height (m)
 WIDTH = 0.12  # column width between the free-slip walls (m)
@@ -131,8 +131,6 @@ def _by_id(ps, name):
 
 
 def run_column(resolution):
-    import time
-
     from solver.simulation import Simulation
 
     scene = column_scene(resolution)
@@ -152,7 +150,7 @@ def run_column(resolution):
     times = np.linspace(0.0, T_COLUMN, 121)[1:]
     top = x0[:, 1] > x0[:, 1].max() - 1e-9
     settle, samples_u, samples_s, ke = [], [], [], []
-    start = time.perf_counter()
+    clock = Stopwatch()
     for t in times:
         sim.advance_to(t, on_step=ramp)
         sim.current_state()
@@ -165,7 +163,7 @@ def run_column(resolution):
             samples_s.append(p - s_dev[:, 1])  # -sigma_yy, compression positive
         n = ps.n_owned
         ke.append(0.5 * float(np.sum(ps["mass"][:n] * np.sum(ps["v_half"][:n] ** 2, axis=1))))
-    wall = time.perf_counter() - start
+    wall, cpu = clock.read()
     z = x0[:, 1]
     u_mean, s_mean = np.mean(samples_u, axis=0), np.mean(samples_s, axis=0)
     u_exact = rho0 * G * (H * z - 0.5 * z * z) / M
@@ -189,7 +187,7 @@ def run_column(resolution):
         top_settlement=np.array(settle),
         ke=np.array(ke),
     )
-    return sim, out, wall
+    return sim, out, wall, cpu
 
 
 def _yield_excess(sim):
@@ -202,8 +200,6 @@ def _yield_excess(sim):
 
 
 def run_heap(resolution):
-    import time
-
     from solver.simulation import Simulation
 
     scene = heap_scene(resolution)
@@ -217,7 +213,7 @@ def run_heap(resolution):
     ke, x_settled = [], None
     slope = HEAP[2][1] / HEAP[1][0]
     body = (HEAP[1][0] - x0[:, 0]) * slope >= 2.0 * scene.h  # heap at least one kernel support thick
-    start = time.perf_counter()
+    clock = Stopwatch()
     for t in times:
         sim.advance_to(t)
         if x_settled is None and t >= T_SETTLE - 1e-12:
@@ -225,7 +221,7 @@ def run_heap(resolution):
         ke.append(
             0.5 * float(np.sum(_by_id(ps, "mass")[body] * np.sum(_by_id(ps, "v_half")[body] ** 2, axis=1)))
         )
-    wall = time.perf_counter() - start
+    wall, cpu = clock.read()
     x = _by_id(ps, "x")
     ke = np.array(ke)
     creep = np.linalg.norm(x - x_settled, axis=1)
@@ -247,6 +243,7 @@ def run_heap(resolution):
             max_yield_excess=float(_yield_excess(sim).max()),
         ),
         wall,
+        cpu,
     )
 
 
@@ -261,8 +258,8 @@ def discretization_error(resolution):
 
 
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
-    sim_c, col, wall_c = run_column(resolution)
-    sim_h, heap, wall_h = run_heap(resolution)
+    sim_c, col, wall_c, cpu_c = run_column(resolution)
+    sim_h, heap, wall_h, cpu_h = run_heap(resolution)
     series = {"column": col, "heap": heap}
     res = CaseResult(
         "soil_self_weight",
@@ -271,6 +268,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
         sim_c.step_count + sim_h.step_count,
         wall_c + wall_h,
         series,
+        cpu_time=cpu_c + cpu_h,
     )
     res.checks = checks(res)
     res.notes = [
@@ -375,8 +373,20 @@ def figure(res, path):
     return path
 
 
+# The study columns the nightly report plots against wall and CPU time (docs/nightly_report.md)
+ACCURACY_COLUMNS = {
+    "settlement_error_pct": "|settlement error| vs 1D analytic (%)",
+    "u_rms_rel": "displacement profile RMS / u(H)",
+    "sigma_rms_rel": "vertical stress RMS / (rho g H)",
+    "heap_creep_mm": "heap creep after 0.5 s (mm)",
+}
+
+
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
-    results = [run(r, out_dir=out_dir) for r in resolutions]
+    results, loads = [], []
+    for r in resolutions:
+        results.append(run(r, out_dir=out_dir))
+        loads.append(load_1min())
     fine = results[-1].series
     rows = []
     for k, res in enumerate(results):
@@ -394,6 +404,8 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                 "particles": res.particles,
                 "steps": res.steps,
                 "wall_time_s": res.wall_time,
+                "cpu_time_s": res.cpu_time,
+                "load_1min": loads[k],
                 "settlement_mm": 1000 * col["settlement"],
                 "settlement_exact_mm": 1000 * col["settlement_exact"],
                 "settlement_error_pct": 100 * (col["settlement"] / col["settlement_exact"] - 1),
@@ -418,8 +430,9 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     lines = [
         "| dx (mm) | particles | steps | settlement (mm) | exact (mm) | error | u RMS / u(H) | sigma_v RMS / "
         "rho g H | "
-        "heap creep after 0.5 s (mm) | heap max displacement (mm) | wall time (s) | checks |",
-        "|" + "---|" * 12,
+        "heap creep after 0.5 s (mm) | heap max displacement (mm) | wall time (s) | CPU time (s) | "
+        "load (1 min) | checks |",
+        "|" + "---|" * 14,
     ]
     for r, res in zip(rows, results):
         lines.append(
@@ -427,13 +440,14 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
             f"{r['settlement_exact_mm']:.4f} | "
             f"{r['settlement_error_pct']:+.2f} % | {r['u_rms_rel']:.3f} | {r['sigma_rms_rel']:.4f} | "
             f"{r['heap_creep_mm']:.3f} | "
-            f"{r['heap_total_max_mm']:.2f} | {r['wall_time_s']:.0f} | "
+            f"{r['heap_total_max_mm']:.2f} | {r['wall_time_s']:.1f} | {r['cpu_time_s']:.1f} | "
+            f"{r['load_1min']:.2f} | "
             + ("pass" if res.passed else "FAIL: " + "; ".join(c.metric for c in res.checks if not c.passed))
             + " |"
         )
     text = (
         "# Soil self-weight: confined column (1D analytic) and a 15 deg heap: resolution study\n\n"
-        "Wall time: stepping, one process, "
+        "Wall and CPU time (time.process_time, all threads): stepping, one process, "
         f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
         f"{machine_load()}.\nReproduce: `NUMBA_NUM_THREADS=1 python -m verification.soil_self_weight "
         "--study`\n\n" + "\n".join(lines) + "\n"

@@ -1,0 +1,495 @@
+"""The benchmark regression gate (issue 12): `make bench-check`.
+
+    python benchmarks/gate.py check [--json SUMMARY] [--baseline FILE]     exit 1 on a regression
+    python benchmarks/gate.py baseline [--runs 10]                          write the baseline
+    python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
+    python benchmarks/gate.py loo [--from-raw FILE]         each baseline run judged by the others
+
+`check` runs benchmarks/bench_gate.py under pytest-benchmark once and compares each benchmark's
+ratio (its time / the calibration kernel's, measured interleaved in the same run; see
+bench_gate.py and calibration.py) with the baseline. A benchmark regressed when its ratio is
+more than `threshold` (relative) above the baseline's median ratio in its first run and in
+RETRIES re-measurements of it alone.
+
+The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
+suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their median and
+MAD-based relative standard deviation (and the plain one and the largest deviation), and
+threshold = MULTIPLE x the MAD-based spread, at least FLOOR (the floor is for a quantity with
+almost no spread, the memory per particle). `repeat` runs `check` RUNS times, optionally with
+the controlled slowdown of benchmarks/slowdown.py, and tabulates the verdicts: an unchanged
+build must pass every run, a 10 % slowdown must be caught; `loo` judges each baseline run by a
+baseline of the others (docs/benchmarks.md has the figures).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+BASELINE = HERE / "baselines" / "gate.json"
+RAW = ROOT / "runs" / "bench" / "baseline_runs.jsonl"
+MULTIPLE = 4.0
+FLOOR = 0.02
+RETRIES = 2  # re-measurements of a benchmark past its threshold before it is flagged
+# How a run's per-round times become one ratio (benchmark / calibration), by wall time
+# (perf_counter) or CPU time (process_time): the medians' ratio, the fastest rounds' ratio
+# (noise on a shared host only slows a round down), or the median of the per-round ratios
+# (each round's benchmark against the calibration call just before it). `baseline` measures the
+# run-to-run spread of each and keeps the estimator with the smallest spread over the timed
+# benchmarks; the gate then uses that one (docs/benchmarks.md).
+ESTIMATORS = ("wall", "cpu", "wall_min", "cpu_min", "wall_paired", "cpu_paired")
+DEFAULT_ESTIMATOR = "cpu_min"
+# every gate benchmark, as named in bench_gate.py (test_<name>)
+GATE = (
+    "water_step",
+    "soil_step",
+    "two_phase_step",
+    "neighbour_rebuild",
+    "mpi_two_rank_step",
+    "cold_compile",
+    "bytes_per_particle",
+)
+
+
+def cpu_model():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def git_commit():
+    try:
+        return subprocess.run(
+            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=ROOT
+        ).stdout.strip()
+    except OSError:
+        return "unknown"
+
+
+def run_suite(slowdown=None, select=None):
+    """One pytest-benchmark run of bench_gate.py: {name: extra_info}, the skipped/failed names
+    with reasons, the pytest exit status and the wall time."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", COLUMNS="400")
+    env.pop("SCOURSPH_BENCH_SLOWDOWN", None)
+    if slowdown:
+        env["SCOURSPH_BENCH_SLOWDOWN"] = str(slowdown)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "bench.json"
+        cmd = [
+            sys.executable,
+            "-m",
+            "pytest",
+            str(HERE / "bench_gate.py"),
+            "--benchmark-only",
+            f"--benchmark-json={out}",
+            "-o",
+            "addopts=",
+            "-o",
+            "python_files=bench_*.py",
+            "-p",
+            "no:cacheprovider",
+            "-v",
+            "-rfE",
+        ]
+        if select:
+            cmd += ["-k", select]
+        start = time.perf_counter()
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT)
+        wall = time.perf_counter() - start
+        data = json.loads(out.read_text()) if out.exists() else {"benchmarks": []}
+    found = {b["name"].removeprefix("test_"): b["extra_info"] for b in data["benchmarks"]}
+    missing = {}
+    for name in GATE:
+        if name in found or (select and select not in name):
+            continue
+        line = next((ln for ln in proc.stdout.splitlines() if f"::test_{name} " in ln), "")
+        m = re.search(r"(SKIPPED|FAILED|ERROR)\s*(?:\((.*)\))?", line)
+        reason = f"{m.group(1).lower()}: {m.group(2) or 'see the pytest output'}" if m else "did not run"
+        missing[name] = reason
+    return {
+        "found": found,
+        "missing": missing,
+        "returncode": proc.returncode,
+        "wall_s": wall,
+        "output": proc.stdout[-4000:] + proc.stderr[-2000:],
+    }
+
+
+def ratios(info):
+    """{estimator: ratio} of one benchmark's run (the size itself where no time is involved)."""
+    r = info.get("rounds", {})
+    if not r.get("cal_wall"):
+        return dict.fromkeys(ESTIMATORS, info["value"])
+    med = statistics.median
+    out = {}
+    for clock, (x, c) in {"wall": ("wall", "cal_wall"), "cpu": ("cpu", "cal_cpu")}.items():
+        xs, cs = r[x], r[c]
+        out[clock] = med(xs) / med(cs)
+        out[f"{clock}_min"] = min(xs) / min(cs)
+        out[f"{clock}_paired"] = (
+            med(a / b for a, b in zip(xs, cs)) if len(xs) == len(cs) else med(xs) / med(cs)
+        )
+    return out
+
+
+def ratio_of(info, estimator):
+    return ratios(info)[estimator]
+
+
+def compare(run, baseline, clock=DEFAULT_ESTIMATOR):
+    """The gate's verdict per benchmark: the summary the nightly report reads."""
+    base = (baseline or {}).get("benchmarks", {})
+    rows = []
+    for name in GATE:
+        if name in run["missing"]:
+            reason = run["missing"][name]
+            skipped = reason.startswith("skipped")
+            rows.append(
+                {
+                    "name": name,
+                    "skipped": reason if skipped else None,
+                    "error": None if skipped else reason,
+                    "regressed": not skipped,
+                }
+            )
+            continue
+        if name not in run["found"]:
+            continue
+        info = run["found"][name]
+        b = base.get(name, {}).get(clock)
+        row = {
+            "name": name,
+            "what": info["what"],
+            "clock": clock,
+            "value": info["value"],
+            "value_cpu": info.get("value_cpu"),
+            "unit": info["unit"],
+            "calibration_s": info.get("calibration_s"),
+            "ratio": ratio_of(info, clock),
+            "ratios": ratios(info),
+            "load_1min": info.get("load_1min"),
+            "slowdown": info.get("slowdown"),
+            "baseline_ratio": b.get("median", b.get("mean")) if b else None,
+            "threshold": b["threshold"] if b else None,
+        }
+        row["change"] = row["ratio"] / row["baseline_ratio"] - 1 if b else None
+        row["regressed"] = bool(b) and row["change"] > row["threshold"]
+        rows.append(row)
+    return rows
+
+
+def summary(run, baseline, baseline_path, clock=None):
+    clock = clock or (baseline or {}).get("estimator", DEFAULT_ESTIMATOR)
+    rows = compare(run, baseline, clock)
+    return {
+        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "host": socket.gethostname(),
+        "cpu": cpu_model(),
+        "commit": git_commit(),
+        "load_1min": os.getloadavg()[0],
+        "wall_s": run["wall_s"],
+        "baseline_source": (
+            f"{baseline_path.relative_to(ROOT) if baseline_path.is_relative_to(ROOT) else baseline_path} "
+            f"(commit {str(baseline.get('commit', '?'))[:10]}, {baseline.get('date', '?')}, host "
+            f"{baseline.get('host', '?')}, {baseline.get('runs', '?')} runs)"
+            if baseline
+            else "none: no baseline file, nothing is gated"
+        ),
+        "same_cpu_as_baseline": bool(baseline) and baseline.get("cpu") == cpu_model(),
+        "estimator": clock,
+        "benchmarks": rows,
+        "regressed": [r["name"] for r in rows if r["regressed"]],
+    }
+
+
+def print_summary(s):
+    print(
+        f"benchmark gate: {s['date']}, host {s['host']}, load {s['load_1min']:.2f}, {s['wall_s']:.0f} s; "
+        f"baseline {s['baseline_source']}"
+    )
+    if s["benchmarks"] and not s["same_cpu_as_baseline"] and "none:" not in s["baseline_source"]:
+        print("  warning: the baseline was measured on another CPU model; ratios may not compare")
+    for r in s["benchmarks"]:
+        if r.get("skipped"):
+            print(f"  {r['name']:20s} {r['skipped']}")
+        elif r.get("error"):
+            print(f"  {r['name']:20s} FAILED TO RUN: {r['error']}")
+        else:
+            ch = f"{r['change']:+.1%} (gate +{r['threshold']:.1%})" if r["baseline_ratio"] else "no baseline"
+            print(
+                f"  {r['name']:20s} {r['value']:.4g} {r['unit']}, ratio {r['ratio']:.4g}, {ch}"
+                f"{'  REGRESSED' if r['regressed'] else ''}"
+            )
+
+
+def load_baseline(path):
+    path = Path(path)
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def gated_run(baseline, baseline_path, slowdown=None, select=None, estimator=None):
+    """One gate run, and up to RETRIES re-measurements of each benchmark past its threshold
+    (that benchmark alone); a benchmark keeps its lowest ratio over the attempts, so it is
+    flagged only if every attempt was past the threshold. Returns (summary, pytest output)."""
+    run = run_suite(slowdown, select)
+    s = summary(run, baseline, baseline_path, estimator)
+    attempts = dict.fromkeys(run["found"], 1)
+    for _ in range(RETRIES):
+        again = [r["name"] for r in s["benchmarks"] if r["regressed"] and r["name"] in run["found"]]
+        if not again:
+            break
+        for name in again:
+            retry = run_suite(slowdown, name)
+            attempts[name] += 1
+            if name in retry["found"] and ratio_of(retry["found"][name], s["estimator"]) < ratio_of(
+                run["found"][name], s["estimator"]
+            ):
+                run["found"][name] = retry["found"][name]
+            run["wall_s"] += retry["wall_s"]
+        s = summary(run, baseline, baseline_path, estimator)
+    for r in s["benchmarks"]:
+        r["attempts"] = attempts.get(r["name"], 1)
+    return s, run["output"]
+
+
+def cmd_check(args):
+    s, output = gated_run(
+        load_baseline(args.baseline), Path(args.baseline), args.slowdown, args.k, args.estimator
+    )
+    print_summary(s)
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(s, indent=1))
+    if s["regressed"]:
+        print(f"benchmark gate: REGRESSION in {', '.join(s['regressed'])}")
+        if any(r.get("error") for r in s["benchmarks"]):
+            print(output)
+        return 1
+    return 0
+
+
+def spread(values):
+    """Centre and spread of a benchmark's ratios over the baseline runs. The reference is the
+    median and the spread the MAD-based standard deviation (1.4826 x median absolute deviation,
+    relative): a run caught in one of the host's slow phases (every time on the machine 25-30 %
+    longer for minutes) must not widen the gate for all the others; `check` re-measures before
+    it flags (RETRIES), so such a phase does not raise a false alarm either."""
+    med = statistics.median(values)
+    mad = statistics.median(abs(v - med) for v in values)
+    mean = statistics.fmean(values)
+    std = statistics.stdev(values) if len(values) > 1 else 0.0
+    return {
+        "median": med,
+        "mean": mean,
+        "std_rel": std / mean,
+        "mad_rel": 1.4826 * mad / med,
+        "max_dev_rel": max(abs(v / med - 1) for v in values),
+        "min": min(values),
+        "max": max(values),
+    }
+
+
+def cmd_baseline(args):
+    if args.from_raw:  # recompute from the raw rounds of earlier baseline runs
+        runs = [json.loads(line) for line in Path(args.from_raw).read_text().splitlines() if line.strip()]
+        args.runs = len(runs)
+        return write_baseline(args, runs)
+    runs = []
+    for k in range(args.runs):
+        run = run_suite()
+        print(
+            f"baseline run {k + 1}/{args.runs}: {run['wall_s']:.0f} s, load {os.getloadavg()[0]:.2f}; "
+            + ", ".join(
+                f"{n} {ratio_of(i, 'wall'):.4g} (CPU paired {ratio_of(i, 'cpu_paired'):.4g})"
+                for n, i in run["found"].items()
+            ),
+            flush=True,
+        )
+        runs.append({"load_1min": os.getloadavg()[0], "wall_s": run["wall_s"], "found": run["found"]})
+        RAW.parent.mkdir(parents=True, exist_ok=True)
+        with open(RAW, "a") as fh:  # every run's raw rounds, kept outside the repository (runs/)
+            fh.write(json.dumps(runs[-1]) + "\n")
+    return write_baseline(args, runs)
+
+
+def write_baseline(args, runs):
+    benches = {}
+    for name in GATE:
+        infos = [r["found"][name] for r in runs if name in r["found"]]
+        if len(infos) < 2:
+            continue
+        benches[name] = {
+            "what": infos[0]["what"],
+            "unit": infos[0]["unit"],
+            "values": [i["value"] for i in infos],
+        }
+        for est in ESTIMATORS:
+            values = [ratio_of(i, est) for i in infos]
+            sp = spread(values)
+            benches[name][est] = {"ratios": values, **sp, "threshold": max(MULTIPLE * sp["mad_rel"], FLOOR)}
+    timed = [n for n, b in benches.items() if b["unit"] == "s"]
+    score = (
+        {e: statistics.fmean(benches[n][e]["mad_rel"] for n in timed) for e in ESTIMATORS} if timed else {}
+    )
+    estimator = args.estimator or (min(score, key=score.get) if score else DEFAULT_ESTIMATOR)
+    out = {
+        "host": socket.gethostname(),
+        "cpu": cpu_model(),
+        "commit": git_commit(),
+        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "runs": args.runs,
+        "loads_1min": [r["load_1min"] for r in runs],
+        "run_wall_s": [r["wall_s"] for r in runs],
+        "rule": f"reference = median ratio over the runs; threshold = max({MULTIPLE:g} x MAD-based "
+        f"relative standard deviation, {FLOOR:g}); a benchmark past it is re-measured up to {RETRIES} "
+        "times and flagged only if every attempt is past it",
+        "estimator": estimator,
+        "mean_mad_rel_by_estimator": score,
+        "benchmarks": benches,
+    }
+    path = Path(args.baseline)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(out, indent=1) + "\n")
+    print(f"baseline written to {path}")
+    print(
+        f"estimator: {estimator} (mean MAD-based relative spread over the timed benchmarks: "
+        + ", ".join(f"{e} {v:.2%}" for e, v in score.items())
+        + ")"
+    )
+    for name, b in benches.items():
+        for est in ESTIMATORS:
+            c = b[est]
+            print(
+                f"  {name:20s} {est:12s} median {c['median']:.4g}, MAD-std {c['mad_rel']:.2%}, std "
+                f"{c['std_rel']:.2%}, max deviation {c['max_dev_rel']:.2%}, threshold +{c['threshold']:.1%}"
+            )
+    return 0
+
+
+def leave_one_out(runs, estimator):
+    """The gate on each baseline run of an unchanged build, judged by a baseline of the other
+    runs (same rule, no re-measurement): [(run index, {benchmark: change}, [flagged])]."""
+    out = []
+    for k, run in enumerate(runs):
+        others = [r for j, r in enumerate(runs) if j != k]
+        changes, flagged = {}, []
+        for name, info in run["found"].items():
+            values = [ratio_of(r["found"][name], estimator) for r in others if name in r["found"]]
+            if len(values) < 2:
+                continue
+            sp = spread(values)
+            threshold = max(MULTIPLE * sp["mad_rel"], FLOOR)
+            changes[name] = ratio_of(info, estimator) / sp["median"] - 1
+            if changes[name] > threshold:
+                flagged.append(name)
+        out.append((k, changes, flagged))
+    return out
+
+
+def cmd_loo(args):
+    runs = [json.loads(line) for line in Path(args.from_raw).read_text().splitlines() if line.strip()]
+    est = args.estimator or (load_baseline(args.baseline) or {}).get("estimator", DEFAULT_ESTIMATOR)
+    result = leave_one_out(runs, est)
+    for k, changes, flagged in result:
+        print(
+            f"run {k + 1}/{len(runs)} against the other {len(runs) - 1} ({est}): "
+            + ", ".join(f"{n} {c:+.1%}{'!' if n in flagged else ''}" for n, c in changes.items())
+        )
+    bad = sum(1 for _, _, f in result if f)
+    print(f"{bad} of {len(runs)} unchanged runs flagged by a baseline of the others (no re-measurement)")
+    return 0
+
+
+def cmd_repeat(args):
+    baseline = load_baseline(args.baseline)
+    if baseline is None:
+        print(f"no baseline at {args.baseline}: run `python benchmarks/gate.py baseline` first")
+        return 2
+    results = []
+    for k in range(args.runs):
+        s, _ = gated_run(baseline, Path(args.baseline), args.slowdown, args.k, args.estimator)
+        results.append(s)
+        print(
+            f"run {k + 1}/{args.runs} (slowdown {args.slowdown or 0:g}, load {s['load_1min']:.2f}): "
+            + ", ".join(
+                f"{r['name']} {r['change']:+.1%}{'!' if r['regressed'] else ''}"
+                + (f" ({r['attempts']} attempts)" if r.get("attempts", 1) > 1 else "")
+                for r in s["benchmarks"]
+                if r.get("change") is not None
+            ),
+            flush=True,
+        )
+    flagged = sum(1 for s in results if s["regressed"])
+    print(f"{flagged} of {args.runs} runs flagged a regression (slowdown {args.slowdown or 0:g})")
+    per = {}
+    for s in results:
+        for r in s["benchmarks"]:
+            if r.get("change") is not None:
+                per.setdefault(r["name"], []).append((r["change"], r["regressed"]))
+    for name, v in per.items():
+        print(
+            f"  {name:20s} flagged {sum(f for _, f in v)}/{len(v)}, change min {min(c for c, _ in v):+.1%} "
+            f"max {max(c for c, _ in v):+.1%}"
+        )
+    if args.out:
+        Path(args.out).write_text(json.dumps({"slowdown": args.slowdown, "runs": results}, indent=1) + "\n")
+    return 0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    for name in ("check", "baseline", "repeat", "loo"):
+        p = sub.add_parser(name)
+        p.add_argument(
+            "--baseline", default=str(BASELINE), help=f"baseline file (default {BASELINE.relative_to(ROOT)})"
+        )
+        p.add_argument(
+            "--estimator",
+            choices=list(ESTIMATORS),
+            help=f"ratio estimator (default: the baseline's choice, else {DEFAULT_ESTIMATOR})",
+        )
+        if name == "loo":
+            p.add_argument(
+                "--from-raw", default=str(RAW), help=f"raw baseline runs (default {RAW.relative_to(ROOT)})"
+            )
+            continue
+        if name != "baseline":
+            p.add_argument(
+                "--slowdown", type=float, help="inject a controlled slowdown (fraction, e.g. 0.10)"
+            )
+            p.add_argument("-k", help="only the benchmarks whose name contains this")
+        if name == "check":
+            p.add_argument(
+                "--json", help="write the gate's summary here (read by `scoursph report --bench-json`)"
+            )
+        else:
+            p.add_argument("--runs", type=int, default=10)
+        if name == "baseline":
+            p.add_argument("--from-raw", help=f"recompute from saved raw runs (e.g. {RAW.relative_to(ROOT)})")
+        if name == "repeat":
+            p.add_argument("--out", help="write every run's summary here (JSON)")
+    args = ap.parse_args(argv)
+    commands = {"check": cmd_check, "baseline": cmd_baseline, "repeat": cmd_repeat, "loo": cmd_loo}
+    return commands[args.command](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
