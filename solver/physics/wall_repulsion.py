@@ -58,21 +58,42 @@ def wall_repulsion(n, x, r0, d_coef, has_lo, lo, has_hi, hi, acc):
 
 
 def largest_height(scene) -> float:
-    """The largest initial height (m) of a block's top above the lowest block point, along -g."""
+    """The head H (m) of the water a scene can bring against a wall, along -g: the largest height
+    of a block's top, or of an inlet's section plus its velocity head u^2 / 2g, above the lowest
+    block point (the domain's floor when the scene has no block, e.g. inflow only)."""
     g = np.asarray(scene.scene.gravity, float)
-    up = -g / np.linalg.norm(g)
+    g_norm = float(np.linalg.norm(g))
+    up = -g / g_norm
     tops, bottoms = [], []
     for block in scene.blocks:
         if hasattr(block, "vertices"):
             points = np.asarray(block.vertices, float)
         else:
-            lo, hi = np.asarray(block.min, float), np.asarray(block.max, float)
-            dim = len(lo)
-            points = np.array([[(hi if (k >> a) & 1 else lo)[a] for a in range(dim)] for k in range(2**dim)])
+            points = _corners(np.asarray(block.min, float), np.asarray(block.max, float))
         heights = points @ up
         tops.append(heights.max())
         bottoms.append(heights.min())
+    for inlet in scene.inlets:
+        origin = np.asarray(inlet.origin, float)
+        width = inlet.width or (inlet.discharge**2 / g_norm) ** (1.0 / 3.0)  # critical depth (Chow 1959)
+        speed = inlet.speed or inlet.discharge / width
+        if inlet.across is not None:
+            across = np.asarray(inlet.across, float)
+        else:  # 2D default of scene_open.Inlet: the direction turned +90 degrees
+            across = np.array([-inlet.direction[1], inlet.direction[0]], float)
+        across = across / np.linalg.norm(across)
+        head = 0.5 * speed * speed / g_norm
+        tops.append(max(origin @ up, (origin + width * across) @ up) + head)
+    if not bottoms:
+        bottoms.append(
+            (_corners(np.asarray(scene.domain.min, float), np.asarray(scene.domain.max, float)) @ up).min()
+        )
     return float(max(tops) - min(bottoms))
+
+
+def _corners(lo, hi):
+    dim = len(lo)
+    return np.array([[(hi if (k >> a) & 1 else lo)[a] for a in range(dim)] for k in range(2**dim)])
 
 
 class WallRepulsion(Term):
