@@ -24,6 +24,7 @@ def test_soil_only_plan_has_no_water_term_or_field():
         "artificial stress",
         "gravity",
         "soil rates",
+        "artificial stress force",
         "soil return mapping",
     ]
     assert plan.pairs == ((Phase.SOIL, Phase.SOIL),)
@@ -51,7 +52,9 @@ def test_equilibrium_image_stress_option_is_planned_for_soil_only_and_explained(
 def test_artificial_stress_off_removes_field_and_term():
     plan = build_plan(small_collapse(overrides={"numerics": {"artificial_stress": 0.0}}))
     assert "art_stress" not in plan.fields and "art_stress" not in plan.halo_fields
+    assert "tension" not in plan.fields
     assert not any("artificial stress" in name for name, _ in plan.equations())
+    assert not any("artificial stress" in t.name for t in plan.terms)
 
 
 def test_soil_sound_speed_constraint_from_k_and_g():

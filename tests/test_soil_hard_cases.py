@@ -236,9 +236,9 @@ def test_settling_phase_drains_the_start_transient():
 def test_column_collapse_ci_size_comes_to_rest_inside_yield_surface():
     res = run(10)  # dx = 1 cm, 200 particles
     by_name = {c.metric: c for c in res.checks}
-    assert (
-        by_name["kinetic energy final / peak"].value < 0.05
-    )  # at dx = 1 cm detached grains may still roll at 1 s
+    # at rest by the case's own definition of its final state (residual KE below 1 % of the
+    # peak, verification/column_collapse.py); measured 1.8e-5 at dx = 1 cm
+    assert by_name["kinetic energy final / peak"].passed, by_name["kinetic energy final / peak"].line()
     assert by_name["max yield excess f/scale"].passed
     # a collapse happened and stayed in the tank: from the 5 mm runout error (-11 % of 0.442 m)
     # and the study's observed order 1.27 (README), the 1 cm runout is about

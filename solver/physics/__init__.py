@@ -5,7 +5,7 @@ docs/adding_a_term.md) and add one line to TERMS. Registration order is executio
 within a stage; a term that needs another's output comes after it.
 """
 
-from .artificial_stress import ArtificialStress
+from .artificial_stress import ArtificialStress, ArtificialStressForce
 from .equilibrium_soil_images import EquilibriumSoilImages
 from .fixed_particles import FixedParticles
 from .fluid_rates import FluidRates
@@ -33,6 +33,7 @@ TERMS = (
     ViscousStress,
     FluidRates,
     SoilRates,
+    ArtificialStressForce,
     SeepageOnSoil,
     SeepageOnWater,
     FixedParticles,

@@ -3,7 +3,6 @@
 continuity        over soil neighbours                                     seed eq. (6)
 momentum          sigma = -p delta + s, eq. (20) without seepage            seed eqs. (12), (20)
 artificial visc.  Monaghan, alpha = beta = 1 for soil                       seed eq. (19)
-artificial stress f_ij^n (R_i + R_j) (artificial_stress.py)                 Gray, Monaghan & Swift (2001)
 deviatoric rate   ds/dt = 2G (eps') + s R^T + R s  (Jaumann)               seed eqs. (13)-(15)
 """
 
@@ -14,13 +13,12 @@ from numba import prange
 
 from ..config import kernel
 from ..fields import RHO_HALF
-from ..kernels import cubic_spline_dwdr, cubic_spline_w
+from ..kernels import cubic_spline_dwdr
 from ..materials import Phase
 from ..particles import FieldSpec
 from ..tensors import N_SYM
 from ..term import Equation, Integrated, Stage, Term
 from . import velocity_gradient
-from .artificial_stress import ArtificialStressSettings
 
 
 @kernel
@@ -41,11 +39,13 @@ def soil_rates(
     targets, start, index, x, v, rho, mean_stress, s, mass, material, sound_speed, shear, h, norm,
     drho, acc, ds,
     av_alpha=None, av_beta=None,  # Monaghan artificial viscosity, seed eq. (19)
-    art=None, art_n=2.55, inv_w_dx=0.0,  # artificial stress (Gray et al. 2001): f_ij^n (R_i + R_j)
+    is3d=None,
 ):  # fmt: skip
     """Continuity (6), momentum (20) without seepage, and the Hooke-Jaumann rate (13)-(15).
-    Adds into drho and acc; writes ds. The velocity gradient is that of velocity_gradient.py."""
-    three = x.shape[1] == 3
+    Adds into drho and acc; writes ds. The velocity gradient is that of velocity_gradient.py.
+    is3d is True in 3D and None in 2D, so that Numba compiles the 2D loop without the z terms
+    (a value test such as x.shape[1] == 3 stays in the loop: 10 % of the 2D soil step)."""
+    three = is3d is not None
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
@@ -64,16 +64,6 @@ def soil_rates(
         q12 = s[i, 4] * ri2
         q02 = s[i, 5] * ri2
         mi = material[i]
-        quiet_i = True  # R_i = 0 (no tension): the common case, see below
-        if art is not None:
-            quiet_i = (
-                art[i, 0] == 0.0
-                and art[i, 1] == 0.0
-                and art[i, 2] == 0.0
-                and art[i, 3] == 0.0
-                and art[i, 4] == 0.0
-                and art[i, 5] == 0.0
-            )
         d_rho = 0.0
         a0 = a1 = a2 = 0.0
         g = velocity_gradient.ZERO
@@ -98,39 +88,20 @@ def soil_rates(
             t11 = q11 + (s[j, 1] - pj) * rj2
             t01 = q01 + s[j, 3] * rj2
             diag = 0.0
-            if av_alpha is not None:  # eq. (19) with beta phi^2 (erratum)
+            # eq. (19) with beta phi^2 (erratum); phi = 0 for receding pairs (vr >= 0), which
+            # skip it: a third of the soil step was the AV of pairs that add exactly zero
+            if av_alpha is not None and vr < 0.0:
                 mj = material[j]
-                phi = h * min(vr, 0.0) / (r2 + hh)
+                phi = h * vr / (r2 + hh)
                 c_bar = 0.5 * (sound_speed[mi] + sound_speed[mj])
                 alpha = 0.5 * (av_alpha[mi] + av_alpha[mj])
                 beta = 0.5 * (av_beta[mi] + av_beta[mj])
                 diag -= (-alpha * c_bar * phi + beta * phi * phi) * 2.0 / (rho_i + rho_j)
-            fn = 0.0
-            if art is not None:  # Gray et al. (2001): + f^n (R_i + R_j)
-                # skipped when R_i = R_j = 0 (both particles in compression), where it adds exactly
-                # zero: the kernel value and the power f^n were 60 % of a cohesionless soil step
-                if not (
-                    quiet_i
-                    and art[j, 0] == 0.0
-                    and art[j, 1] == 0.0
-                    and art[j, 2] == 0.0
-                    and art[j, 3] == 0.0
-                    and art[j, 4] == 0.0
-                    and art[j, 5] == 0.0
-                ):
-                    fn = (cubic_spline_w(r, h, norm) * inv_w_dx) ** art_n
-                    t00 += fn * (art[i, 0] + art[j, 0])
-                    t11 += fn * (art[i, 1] + art[j, 1])
-                    t01 += fn * (art[i, 3] + art[j, 3])
             fm = m_j * fr
             if three:
                 t22 = q22 + (s[j, 2] - pj) * rj2
                 t12 = q12 + s[j, 4] * rj2
                 t02 = q02 + s[j, 5] * rj2
-                if art is not None and fn != 0.0:
-                    t22 += fn * (art[i, 2] + art[j, 2])
-                    t12 += fn * (art[i, 4] + art[j, 4])
-                    t02 += fn * (art[i, 5] + art[j, 5])
                 a0 += fm * ((t00 + diag) * d0 + t01 * d1 + t02 * d2)
                 a1 += fm * (t01 * d0 + (t11 + diag) * d1 + t12 * d2)
                 a2 += fm * (t02 * d0 + t12 * d1 + (t22 + diag) * d2)
@@ -183,7 +154,6 @@ class SoilRates(Term):
         av = any(materials.av_alpha[k] > 0 or materials.av_beta[k] > 0 for k in soil)
         self.av_alpha = materials.av_alpha if av else None
         self.av_beta = materials.av_beta if av else None
-        self.art = ArtificialStressSettings.of(scene)
         self.fields = {
             "rho_half": RHO_HALF,
             "stress_dev_half": FieldSpec(N_SYM, np.float64, "leap-frog s at n+1/2 (eq. 27)"),
@@ -193,9 +163,7 @@ class SoilRates(Term):
             Integrated("rho", "rho_half", "drho"),
             Integrated("stress_dev", "stress_dev_half", "dstress"),
         )
-        self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev") + (
-            ("art_stress",) if self.art else ()
-        )
+        self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev")
         self.adds_to = ("acc", "drho")
         self.writes = ("dstress",)
         equations = [
@@ -207,15 +175,10 @@ class SoilRates(Term):
             equations.append(
                 Equation("Monaghan artificial viscosity", "seed eq. (19), alpha = beta = 1 for soil")
             )
-        if self.art:
-            equations.append(
-                Equation("artificial stress f_ij^n (R_i + R_j)", "Gray, Monaghan & Swift (2001)")
-            )
         self.equations = tuple(equations)
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
-        art = self.art
         soil_rates(
             nl.targets,
             nl.start,
@@ -236,7 +199,5 @@ class SoilRates(Term):
             ps["dstress"],
             self.av_alpha,
             self.av_beta,
-            ps["art_stress"] if art else None,
-            art.exponent if art else 0.0,
-            art.inv_w_dx if art else 0.0,
+            ctx.is3d,
         )

@@ -1,0 +1,72 @@
+"""Back-to-back A/B timing of one step in two checkouts, for speed claims on a noisy host.
+
+    python benchmarks/ab_step.py OLD_CHECKOUT NEW_CHECKOUT --kind soil --rounds 4
+
+Each round runs the benchmark scene of each checkout in its own process (its own `solver`),
+alternating, one Numba thread, and reports the CPU time per step of the fastest of 15
+five-step blocks (after 3 warm-up steps). CPU time rather than wall time, and the two builds
+alternated, because this 2-core host's speed varies 2x within an hour: the ratio new/old
+of one round is the figure to quote, with the load printed beside it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+
+CHILD = """
+import sys, time
+root, kind = sys.argv[1], sys.argv[2]
+sys.path[:0] = [root, root + "/benchmarks"]
+import numba
+numba.set_num_threads(1)
+if kind == "water":
+    from dam_break_setup import dam_break
+    sim = dam_break(25_000)
+else:
+    from bench_soil_step import soil_collapse
+    sim = soil_collapse(25_000)
+for _ in range(3):
+    sim.step()
+blocks = []
+for _ in range(15):
+    t0 = time.process_time()
+    for _ in range(5):
+        sim.step()
+    blocks.append((time.process_time() - t0) / 5)
+print(min(blocks), sim.particles.n_owned)
+"""
+
+
+def step_time(root, kind):
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    out = subprocess.run(
+        [sys.executable, "-c", CHILD, os.path.abspath(root), kind], env=env, capture_output=True, text=True
+    )
+    if out.returncode:
+        raise SystemExit(f"{root}: {out.stderr.strip().splitlines()[-1]}")
+    seconds, n = out.stdout.split()
+    return float(seconds), int(n)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("old")
+    ap.add_argument("new")
+    ap.add_argument("--kind", choices=("water", "soil"), default="soil")
+    ap.add_argument("--rounds", type=int, default=4)
+    args = ap.parse_args(argv)
+    for k in range(args.rounds):
+        (t_old, n), (t_new, _) = step_time(args.old, args.kind), step_time(args.new, args.kind)
+        load = os.getloadavg()[0]
+        rates = f"old {n / t_old / 1e6:.2f}, new {n / t_new / 1e6:.2f} M particle-steps/s"
+        print(
+            f"round {k + 1}: {args.kind}, {n} particles, old {t_old * 1e3:.2f} ms, new {t_new * 1e3:.2f} ms "
+            f"({rates}), new/old {t_new / t_old:.3f}, load {load:.1f}"
+        )
+
+
+if __name__ == "__main__":
+    main()
