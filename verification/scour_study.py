@@ -120,7 +120,8 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1):
         run_scene(scene, out, quiet=True, overwrite=True)
     except BlowUpError as exc:
         status = f"blew up: {exc}"
-    except KeyboardInterrupt:  # stopped (SIGINT) for want of time: run.json and scour.csv are written
+    except KeyboardInterrupt:  # Ctrl-C of a foreground run: run.json and scour.csv are written (a
+        # background job ignores SIGINT: kill it and use `finish`)
         status = "stopped"
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
     report = json.loads((out / "run.json").read_text())
@@ -153,6 +154,46 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1):
     print(
         f"{name}: {status}, t = {summary['t_reached']:.4f} s, {wall:.0f} s wall, {cpu:.0f} s CPU", flush=True
     )
+    return summary
+
+
+def finish_case(soil, q, dx, length=0.25, cpu_s=float("nan"), wall_s=float("nan")):
+    """The summary of a run that was killed (no run.json): scour outputs from the snapshots on disk,
+    the time reached from the last one; CPU and wall time as measured from outside (ps)."""
+    from solver.output.hdf5_writer import read_series
+    from solver.output.scour import write_scour_outputs
+    from solver.scene import load_scene
+
+    name = case_name(soil, q, dx, length)
+    out = RUNS / name
+    scene = load_scene(out / "scene.toml")
+    write_scour_outputs(out, scene)
+    series = read_series(out / "particles.h5")
+    summary = {
+        "case": name,
+        "soil": soil,
+        "q": q,
+        "dx": dx,
+        "length": length,
+        "end_time": scene.scene.end_time,
+        "status": "stopped (killed for want of time; summary from its snapshots)",
+        "t_reached": series[-1][0],
+        "steps": 0,
+        "particles_end": int(len(series[-1][1]["position"])),
+        "wall_s": wall_s,
+        "cpu_s": cpu_s,
+        "stepping_wall_s": float("nan"),
+        "threads": 1,
+        "load_start": float("nan"),
+        "load_end": os.getloadavg()[0],
+        "max_rss_mb": float("nan"),
+        "body_leaks": None,
+        "volume_balance": None,
+    }
+    dest = RESULTS / "cases"
+    dest.mkdir(parents=True, exist_ok=True)
+    (dest / f"{name}.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (dest / f"{name}_scour.csv").write_text((out / "scour.csv").read_text())
     return summary
 
 
@@ -488,10 +529,19 @@ def main(argv=None):
     lg.add_argument("--jobs", type=int, default=2)
     lg.add_argument("--length", type=float, default=LONG_LENGTH, help="soil layer length (m)")
     sub.add_parser("report", help="tables and figures from the runs made")
+    f = sub.add_parser("finish", help="summarise a run that was killed, from its snapshots")
+    f.add_argument("soil", choices=SOILS)
+    f.add_argument("q", type=float)
+    f.add_argument("--dx", type=float, default=DX)
+    f.add_argument("--length", type=float, default=0.25)
+    f.add_argument("--cpu", type=float, default=float("nan"), help="CPU seconds measured from outside")
+    f.add_argument("--wall", type=float, default=float("nan"), help="wall seconds measured from outside")
     args = ap.parse_args(argv)
     if args.cmd == "run":
         s = run_case(args.soil, args.q, args.dx, args.end, args.length, args.threads)
         return 0 if s["status"] == "completed" else 1
+    if args.cmd == "finish":
+        finish_case(args.soil, args.q, args.dx, args.length, args.cpu, args.wall)
     if args.cmd == "all":
         run_all(study_cases(args.end, fine=() if args.coarse_only else FINE), args.jobs)
     elif args.cmd == "long":
