@@ -350,6 +350,13 @@ class BodyGuard(Term):
     def restore(self, state):
         self.leaks, self.deepest = int(state["leaks"]), float(state["deepest"])
 
+    def regroup_state(self, states, size):
+        """Per-rank leak counts (a restart on another rank count): the sum on rank 0, zero elsewhere;
+        the deepest leak is a maximum, held by every rank."""
+        deepest = max(float(s["deepest"]) for s in states)
+        leaks = sum(int(s["leaks"]) for s in states)
+        return [{"leaks": leaks, "deepest": deepest}] + [{"leaks": 0, "deepest": deepest}] * (size - 1)
+
     def run(self, ctx):
         ps, g = ctx.particles, self.geo
         count, deepest = guard_bodies(

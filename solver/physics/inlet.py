@@ -224,6 +224,16 @@ class Inlets(Term):
         for z, s in zip(self.zones, state):
             z.restore(s)
 
+    def regroup_state(self, states, size):
+        """A restart on another rank count: the inlet's progress is replicated (rank 0's); the
+        back-flow each rank removed is a per-rank share, summed onto rank 0."""
+        first, rest = [], []
+        for k in range(len(self.zones)):
+            back = np.sum([np.atleast_1d(np.asarray(s[k]["backflow_mass"], float)) for s in states], axis=0)
+            first.append(dict(states[0][k], backflow_mass=back.tolist()))
+            rest.append(dict(states[0][k], backflow_mass=np.zeros_like(back).tolist()))
+        return [first] + [rest] * (size - 1)
+
     # -- set-up: the initial buffer (and prefill) on the replicated particle set ------------
     def start(self, ctx):
         ps = ctx.particles

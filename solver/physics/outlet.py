@@ -79,6 +79,13 @@ class Outlets(Term):
         self.removed_mass = np.array(state["removed_mass"], float)
         self.removed_count = np.array(state["removed_count"], dtype=np.int64)
 
+    def regroup_state(self, states, size):
+        """Per-rank shares (a restart on another rank count): their sum on rank 0, zero elsewhere."""
+        mass = np.sum([s["removed_mass"] for s in states], axis=0)
+        count = np.sum([s["removed_count"] for s in states], axis=0)
+        zero = {"removed_mass": np.zeros_like(mass).tolist(), "removed_count": np.zeros_like(count).tolist()}
+        return [{"removed_mass": mass.tolist(), "removed_count": count.tolist()}] + [zero] * (size - 1)
+
     def run(self, ctx):
         ps = ctx.particles
         n = ps.n_owned
