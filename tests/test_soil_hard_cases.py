@@ -38,7 +38,7 @@ def _ke_at_rest(sim, duration):
     return 0.5 * float(np.sum(sim.particles["mass"][:n])) * (0.5 * sim.scene.scene.spacing / duration) ** 2
 
 
-def _run_and_check(sim, t_end, v0=None):
+def _run_and_check(sim, t_end, v0=None, at_rest=True):
     ps = sim.particles
     if v0 is not None:
         ps["v"][: ps.n_owned] = v0
@@ -53,7 +53,7 @@ def _run_and_check(sim, t_end, v0=None):
     assert np.isfinite(x).all() and np.isfinite(ps["stress_dev"][:n]).all()
     assert (x >= sim.lo).all() and (x <= sim.hi).all()  # nothing through a wall
     assert sim.deepest_penetration < 0.5 * sim.scene.scene.spacing  # reflections (if any) stayed shallow
-    assert ke[-1] <= _ke_at_rest(sim, t_end), (
+    assert not at_rest or ke[-1] <= _ke_at_rest(sim, t_end), (
         ke[-1],
         _ke_at_rest(sim, t_end),
         max(ke),
@@ -136,7 +136,7 @@ def test_settled_heap_stays_at_rest_for_10_collapse_times():
     assert np.abs(v).max() < 0.5 * 0.01 / 3.0  # at rest: no faster than dx/2 over the run (module doc)
 
 
-def _deposit(dx, scheme="seed"):
+def _deposit(dx, scheme="seed", at_rest=True):
     # The settled heap of issue 3: the deposit a collapse leaves, a heap shaped and settled by
     # its own flow, run on for 10 collapse times. Collapse time t_c: from release until the
     # kinetic energy falls below 1 % of its peak (the "at rest" definition of
@@ -156,10 +156,16 @@ def _deposit(dx, scheme="seed"):
     t_c = float(samples[np.flatnonzero(after_peak & (ke < 0.01 * peak))[0]])
     n = ps.n_owned
     x1 = ps["x"][:n][np.argsort(ps["id"][:n])].copy()
-    long_ke = _run_and_check(_Offset(sim, sim.t), 10 * t_c)
+    long_ke = _run_and_check(_Offset(sim, sim.t), 10 * t_c, at_rest=at_rest)
     n = ps.n_owned
     moved = np.linalg.norm(ps["x"][:n][np.argsort(ps["id"][:n])] - x1, axis=1)
-    return {"ke": long_ke, "peak": peak, "moved_dx": moved.max() / dx, "reflections": sim.wall_reflections}
+    return {
+        "ke": long_ke,
+        "ke_at_rest": _ke_at_rest(sim, 10 * t_c),
+        "peak": peak,
+        "moved_dx": moved.max() / dx,
+        "reflections": sim.wall_reflections,
+    }
 
 
 def _deposit_stays_at_rest(dx, scheme="seed"):
@@ -183,14 +189,17 @@ def test_collapse_deposit_stays_at_rest_for_10_collapse_times():
     _deposit_stays_at_rest(0.005)
 
 
-def test_seed_scheme_lets_a_bottom_row_particle_of_the_ci_size_deposit_slip():
+def test_seed_scheme_leaves_the_ci_size_deposit_moving():
     # Known defect of the seed's mirror images, pinned (it was a strict xfail): at dx = 1 cm bottom-row
     # particles pressed to y ~ 0 during the collapse (inside the image layer, where the self-image's
-    # repulsion vanishes) chatter vertically at ~3 mm/s, and one slips 3.7 dx at t ~ 5.3 s (kinetic
-    # energy 20x the level at 1 s, still < 1 % of the peak): the mirror image leaves it in neutral
-    # equilibrium at the wall. Pinned: the largest displacement over 10 t_c exceeds dx/2.
-    d = _deposit(0.01, "seed")
-    assert d["moved_dx"] > 0.5, d["moved_dx"]
+    # repulsion vanishes) stay in neutral equilibrium at the wall and keep moving. How it shows
+    # depends on round-off (the deposit is chaotic at this level): one particle slipped 3.7 dx at
+    # t ~ 5.3 s before the soil speed-up of issue 12; since then the final kinetic energy is 10x the
+    # at-rest bound (2.3e-4 against 2.2e-5 J/m) with no particle beyond dx/2. Pinned: the deposit is
+    # not at rest by one of the two criteria of _deposit_stays_at_rest (the slip breaks the energy
+    # bound, so only the health checks of _run_and_check apply on the way).
+    d = _deposit(0.01, "seed", at_rest=False)
+    assert d["moved_dx"] > 0.5 or d["ke"][-1] > d["ke_at_rest"], (d["moved_dx"], d["ke"][-1], d["ke_at_rest"])
 
 
 def test_defaults_keep_the_ci_size_deposit_at_rest_for_10_collapse_times():
