@@ -157,6 +157,27 @@ def test_soil_restart_is_bit_for_bit(tmp_path, one_thread):
     assert_same_checkpoint(ref / "checkpoints" / names[-1], copy / "checkpoints" / names[-1])
 
 
+def test_restart_from_any_step_is_bit_for_bit(tmp_path, one_thread):
+    """A signal can stop a run after any step, so a checkpoint written after any step must resume
+    exactly: a run with a checkpoint after every step (past two neighbour rebuilds and an output
+    time), resumed from every twelfth of them, each time reproduces the uninterrupted series."""
+    sets = DAM_SET + ["scene.end_time=0.006", "output.checkpoint_interval=1e-9", "output.checkpoint_keep=1000"]
+    scene_path = _scene_file(tmp_path, DAM, sets)
+    ref = tmp_path / "ref"
+    result = run_scene(load_scene(scene_path), ref, quiet=True)
+    assert result.sim.rebuilds >= 2
+    names = _names(ref)
+    assert len(names) == result.sim.step_count  # one after every step
+    for name in names[::12]:
+        copy = tmp_path / "copy"
+        shutil.rmtree(copy, ignore_errors=True)
+        shutil.copytree(ref, copy, ignore=shutil.ignore_patterns("checkpoints"))
+        (copy / "checkpoints").mkdir()
+        shutil.copy(ref / "checkpoints" / name, copy / "checkpoints" / name)
+        run_scene(load_scene(scene_path), None, quiet=True, restart=copy, checkpoint=name)
+        assert_same_series(ref, copy)
+
+
 def test_a_completed_run_is_extended_with_a_later_end_time(tmp_path, one_thread):
     scene_path = _scene_file(tmp_path, DAM, DAM_SET + ["output.checkpoint_interval=0"])
     ref = tmp_path / "run"
@@ -322,11 +343,6 @@ def _reference_run(scene_path, out):
     assert r.returncode == 0, r.stderr[-3000:]
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="known flaky: failed inside the whole suite in 2 of 2 runs (the resumed series differs from the "
-    "uninterrupted one in the last bits) and alone in 1 of 6; cause not found (issue 14 stays open for it)",
-)
 def test_sigkill_while_writing_a_checkpoint_restarts_from_the_previous_one(tmp_path, one_thread):
     """SIGKILL while the second checkpoint is being written (held open by a test hook after its
     data, before its rename): the first stays whole, the restart continues from it and ends
@@ -362,11 +378,6 @@ def test_sigkill_while_writing_a_checkpoint_restarts_from_the_previous_one(tmp_p
     assert_same_checkpoint(ref / "checkpoints" / _names(ref)[-1], folder / _names(ref)[-1])
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="known flaky: failed inside the whole suite in 2 of 2 runs (the resumed series differs from the "
-    "uninterrupted one in the last bits) and alone in 1 of 6; cause not found (issue 14 stays open for it)",
-)
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_signal_writes_a_checkpoint_and_the_restart_matches(tmp_path, one_thread, sig):
     """SIGTERM / SIGINT at an arbitrary step: a checkpoint at the end of that step, one clear line,
