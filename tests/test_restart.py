@@ -161,7 +161,11 @@ def test_restart_from_any_step_is_bit_for_bit(tmp_path, one_thread):
     """A signal can stop a run after any step, so a checkpoint written after any step must resume
     exactly: a run with a checkpoint after every step (past two neighbour rebuilds and an output
     time), resumed from every twelfth of them, each time reproduces the uninterrupted series."""
-    sets = DAM_SET + ["scene.end_time=0.006", "output.checkpoint_interval=1e-9", "output.checkpoint_keep=1000"]
+    sets = DAM_SET + [
+        "scene.end_time=0.006",
+        "output.checkpoint_interval=1e-9",
+        "output.checkpoint_keep=1000",
+    ]
     scene_path = _scene_file(tmp_path, DAM, sets)
     ref = tmp_path / "ref"
     result = run_scene(load_scene(scene_path), ref, quiet=True)
