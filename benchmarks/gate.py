@@ -5,11 +5,11 @@
     python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
     python benchmarks/gate.py loo [--from-raw FILE]         each baseline run judged by the others
 
-`check` runs benchmarks/bench_gate.py under pytest-benchmark once and compares each benchmark's
-ratio (its time / the calibration kernel's, measured interleaved in the same run; see
-bench_gate.py and calibration.py) with the baseline. A benchmark regressed when its ratio is
-more than `threshold` (relative) above the baseline's median ratio in its first run and in
-RETRIES re-measurements of it alone.
+`check` runs benchmarks/bench_gate.py under pytest-benchmark in PROCESSES processes, one after
+the other, and keeps each benchmark's lowest ratio (its time / the calibration kernel's, measured
+interleaved in the same run; see bench_gate.py and calibration.py). A benchmark regressed when
+that ratio is more than `threshold` (relative) above the baseline's median ratio, and stays so
+in RETRIES re-measurements of it alone (one process each; it keeps its lowest ratio).
 
 The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
 suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their median and
@@ -44,6 +44,14 @@ RAW = ROOT / "runs" / "bench" / "baseline_runs.jsonl"
 MULTIPLE = 4.0
 FLOOR = 0.02
 RETRIES = 2  # re-measurements of a benchmark past its threshold before it is flagged
+# One measurement is the lowest ratio of PROCESSES runs of the suite, each in its own process, one
+# after the other. The host has slow phases lasting minutes in which the memory-bound steps lose
+# 15-20 % against the calibration kernel, which stays in cache (the 2026-12-01 18:08 baseline:
+# water 1.37-1.43 in six runs, 1.59-1.65 in four). A single process per measurement put those
+# phases into the baseline's spread (thresholds +9 to +10 %), and a 10 % slowdown measured +7 to
+# +9 % against it was missed in 2 of 2 runs; the lower of two processes is in a slow phase only
+# when both are, so the baseline's spread is that of the fast phase (docs/benchmarks.md).
+PROCESSES = 2
 # How a run's per-round times become one ratio (benchmark / calibration), by wall time
 # (perf_counter) or CPU time (process_time): the medians' ratio, the fastest rounds' ratio
 # (noise on a shared host only slows a round down), or the median of the per-round ratios
@@ -130,6 +138,25 @@ def run_suite(slowdown=None, select=None):
         "wall_s": wall,
         "output": proc.stdout[-4000:] + proc.stderr[-2000:],
     }
+
+
+def measure(slowdown=None, select=None, processes=None):
+    """One measurement: the suite run PROCESSES times (each its own pytest process); per
+    benchmark the run with the lowest ratio (DEFAULT_ESTIMATOR) is kept. A benchmark missing from
+    any run is reported missing."""
+    runs = [run_suite(slowdown, select) for _ in range(processes or PROCESSES)]
+    merged = {**runs[0], "found": {}, "missing": {}, "wall_s": sum(r["wall_s"] for r in runs)}
+    for r in runs:
+        merged["missing"].update(r["missing"])
+        for name, info in r["found"].items():
+            best = merged["found"].get(name)
+            if best is None or ratio_of(info, DEFAULT_ESTIMATOR) < ratio_of(best, DEFAULT_ESTIMATOR):
+                merged["found"][name] = info
+    for name in merged["missing"]:
+        merged["found"].pop(name, None)
+    merged["returncode"] = max(r["returncode"] for r in runs)
+    merged["output"] = "".join(r["output"] for r in runs)[-6000:]
+    return merged
 
 
 def ratios(info):
@@ -248,7 +275,7 @@ def gated_run(baseline, baseline_path, slowdown=None, select=None, estimator=Non
     """One gate run, and up to RETRIES re-measurements of each benchmark past its threshold
     (that benchmark alone); a benchmark keeps its lowest ratio over the attempts, so it is
     flagged only if every attempt was past the threshold. Returns (summary, pytest output)."""
-    run = run_suite(slowdown, select)
+    run = measure(slowdown, select)
     s = summary(run, baseline, baseline_path, estimator)
     attempts = dict.fromkeys(run["found"], 1)
     for _ in range(RETRIES):
@@ -256,7 +283,7 @@ def gated_run(baseline, baseline_path, slowdown=None, select=None, estimator=Non
         if not again:
             break
         for name in again:
-            retry = run_suite(slowdown, name)
+            retry = measure(slowdown, name, processes=1)
             attempts[name] += 1
             if name in retry["found"] and ratio_of(retry["found"][name], s["estimator"]) < ratio_of(
                 run["found"][name], s["estimator"]
@@ -313,7 +340,7 @@ def cmd_baseline(args):
         return write_baseline(args, runs)
     runs = []
     for k in range(args.runs):
-        run = run_suite()
+        run = measure()
         print(
             f"baseline run {k + 1}/{args.runs}: {run['wall_s']:.0f} s, load {os.getloadavg()[0]:.2f}; "
             + ", ".join(
@@ -322,7 +349,14 @@ def cmd_baseline(args):
             ),
             flush=True,
         )
-        runs.append({"load_1min": os.getloadavg()[0], "wall_s": run["wall_s"], "found": run["found"]})
+        runs.append(
+            {
+                "load_1min": os.getloadavg()[0],
+                "wall_s": run["wall_s"],
+                "processes": PROCESSES,
+                "found": run["found"],
+            }
+        )
         RAW.parent.mkdir(parents=True, exist_ok=True)
         with open(RAW, "a") as fh:  # every run's raw rounds, kept outside the repository (runs/)
             fh.write(json.dumps(runs[-1]) + "\n")
@@ -357,7 +391,8 @@ def write_baseline(args, runs):
         "runs": args.runs,
         "loads_1min": [r["load_1min"] for r in runs],
         "run_wall_s": [r["wall_s"] for r in runs],
-        "rule": f"reference = median ratio over the runs; threshold = max({MULTIPLE:g} x MAD-based "
+        "rule": f"a measurement = the lowest ratio of {PROCESSES} processes; "
+        f"reference = median ratio over the runs; threshold = max({MULTIPLE:g} x MAD-based "
         f"relative standard deviation, {FLOOR:g}); a benchmark past it is re-measured up to {RETRIES} "
         "times and flagged only if every attempt is past it",
         "estimator": estimator,

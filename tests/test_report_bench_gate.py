@@ -101,15 +101,35 @@ def test_a_flag_is_confirmed_by_re_measuring(monkeypatch):
     """A benchmark past its threshold is measured again (alone); a transient slow run passes on
     the retry, a real slowdown stays past the threshold in every attempt."""
     for first, later, flagged, attempts in ((1.2, 1.01, False, 2), (1.2, 1.15, True, 1 + gate.RETRIES)):
-        calls = iter([_run(first)] + [_run(later)] * gate.RETRIES)
+        calls = iter([_run(first)] * gate.PROCESSES + [_run(later)] * gate.RETRIES)
         monkeypatch.setattr(
             gate,
             "run_suite",
-            lambda slowdown=None, select=None, c=calls: {**next(c), "wall_s": 1.0, "output": ""},
+            lambda slowdown=None, select=None, c=calls: {
+                **next(c),
+                "wall_s": 1.0,
+                "output": "",
+                "returncode": 0,
+            },
         )
         s, _ = gate.gated_run(BASE, ROOT / "benchmarks" / "baselines" / "gate.json", estimator="wall")
         row = next(r for r in s["benchmarks"] if r["name"] == "water_step")
         assert row["regressed"] is flagged and row["attempts"] == attempts
+
+
+def test_a_measurement_keeps_the_faster_process(monkeypatch):
+    """One measurement is the lowest ratio of PROCESSES processes (by DEFAULT_ESTIMATOR): a process
+    caught in one of the host's slow phases does not count unless every process was; a benchmark
+    that failed in any process stays missing."""
+    runs = iter([_run(1.3), _run(1.02)] + [_run(1.0)] * (gate.PROCESSES - 2))
+    monkeypatch.setattr(
+        gate,
+        "run_suite",
+        lambda slowdown=None, select=None: {**next(runs), "wall_s": 1.0, "output": "", "returncode": 0},
+    )
+    m = gate.measure(processes=2)
+    assert gate.ratio_of(m["found"]["water_step"], gate.DEFAULT_ESTIMATOR) == 1.02
+    assert m["missing"]["soil_step"].startswith("failed") and m["wall_s"] == 2.0
 
 
 def test_leave_one_out_judges_each_unchanged_run_by_the_others():
