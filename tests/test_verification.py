@@ -135,7 +135,7 @@ def impact_ci(tmp_path_factory):
     return impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=tmp_path_factory.mktemp("impact"))
 
 
-PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+PLATEAU_MEAN = impact_pressure.PLATEAU_MEAN
 PLATEAU_NOISE = "plateau noise: sd of the acoustically filtered p* at sensor 2, t* 3-5.5"
 
 

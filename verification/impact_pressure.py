@@ -102,6 +102,13 @@ DEFAULT_RESOLUTION = 20  # particles over H
 STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
 STUDY = RESULTS / "impact_pressure" / "study.csv"
 TIME_SCALE = math.sqrt(H / G)
+PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+# Checks expected to fail until the model changes (the nightly report shows them as known failures and
+# flags them if they pass, like the strict xfail in tests/test_verification.py)
+KNOWN_FAILURES = {
+    PLATEAU_MEAN: "the 2D SPH plateau lies above the repetitions' band (+0.21 / +0.24 / +0.28 at H/20 / "
+    "H/40 / H/80) and moves away with refinement (verification/results/impact_pressure/README.md)",
+}
 
 
 def scene(resolution, end_star=T_END, **numerics):
@@ -364,6 +371,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
         particles=sim_run["particles"],
         steps=sim_run["steps"],
         wall_time=wall,
+        cpu_time=sim_run["cpu_s"],
         series={"run": sim_run, "metrics": m, "reference": ref},
     )
     finished = sim_run["status"] == "completed"
@@ -396,7 +404,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
     e_mean = allowance("plateau_mean_s2", resolution)
     res.checks.append(
         Check(
-            "plateau mean p* at sensor 2, t* 3-5.5, minus the band median",
+            PLATEAU_MEAN,
             m.get("plateau_mean_s2", float("nan")) - ref["plateau_median"],
             ref["plateau_half_width"] + e_mean,
             f"half-width of the repetitions' band ({ref['plateau_half_width']:.3f}) "
@@ -486,7 +494,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS / "impact_pressure", **
             "particles": res.particles,
             "steps": res.steps,
             "wall_s": round(res.wall_time, 1),
-            "cpu_s": round(res.series["run"]["cpu_s"], 1),
+            "cpu_s": round(res.cpu_time, 1),
         }
         for key in ("status", "reflections", "impact_s1", "impact_s2", "peak_s1", "peak_s2", "peak_s3",
                     "plateau_mean_s1", "plateau_mean_s2", "plateau_sd_s1", "plateau_sd_s2",
