@@ -2,7 +2,7 @@
 experiments/impact3/series.py (the same simulate() as `python -m verification.impact_pressure --study`,
 run one resolution at a time so the runs could share the loaded host with other work).
 
-python experiments/impact3/study_from_series.py RUN_R20.npz RUN_R40.npz [RUN_R80.npz]
+PYTHONPATH=. python experiments/impact3/study_from_series.py RUN_R20.npz RUN_R40.npz [RUN_R80.npz]
 """
 
 import sys
