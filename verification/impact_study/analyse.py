@@ -1,7 +1,7 @@
 """Plateau statistics of saved series: sd, sd about a cubic trend, dominant frequencies, the bulk's
 correlation with the sensor, and the plateau sd after moving averages of several widths.
 
-python experiments/impact3/analyse.py RUN.npz [RUN.npz ...]
+python -m verification.impact_study.analyse RUN.npz [RUN.npz ...]
 """
 
 import sys

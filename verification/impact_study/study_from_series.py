@@ -1,15 +1,15 @@
 """Write verification/results/impact_pressure/study.{csv,md} and the figures from saved series of
-experiments/impact3/series.py (the same simulate() as `python -m verification.impact_pressure --study`,
+verification/impact_study/series.py (the same simulate() as `python -m verification.impact_pressure --study`,
 run one resolution at a time so the runs could share the loaded host with other work).
 
-PYTHONPATH=. python experiments/impact3/study_from_series.py RUN_R20.npz RUN_R40.npz [RUN_R80.npz]
+python -m verification.impact_study.study_from_series RUN_R20.npz RUN_R40.npz [RUN_R80.npz]
 """
 
 import sys
 
-from experiments.impact3.remetric import load
 from verification import impact_pressure as ip
 from verification.common import save_study, timing_note
+from verification.impact_study.remetric import load
 
 KEYS = (
     "status",
@@ -51,8 +51,8 @@ def main():
         "study",
         note=timing_note(
             "NUMBA_NUM_THREADS=1 python -m verification.impact_pressure "
-            "--study (here: experiments/impact3/series.py per resolution, "
-            "then experiments/impact3/study_from_series.py)"
+            "--study (here: verification/impact_study/series.py per resolution, "
+            "then verification/impact_study/study_from_series.py)"
         ),
     )
 

@@ -1,6 +1,6 @@
 """Run the Lobovsky tank and save the raw probe series (t*, p* per sensor) plus run facts.
 
-python experiments/impact3/series.py OUT.npz RESOLUTION [key=value numerics ...] [mat.KEY=VALUE ...]
+python -m verification.impact_study.series OUT.npz RESOLUTION [key=value numerics ...] [mat.KEY=VALUE ...]
 
 Also records, per step, the mean p* of the particles within 0.3 m of the far wall (a bulk acoustic
 mode shows in it; a probe artefact does not).

@@ -1,6 +1,6 @@
 """Recompute the impact case's metrics (verification.impact_pressure.metrics) from saved series.
 
-python experiments/impact3/remetric.py RUN.npz ...   (c0 from the run's mat.sound_speed_factor)
+python -m verification.impact_study.remetric RUN.npz ...   (c0 from the run's mat.sound_speed_factor)
 """
 
 import json

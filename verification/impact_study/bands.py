@@ -1,6 +1,6 @@
 """Share of the plateau variance (sensor 2, t* 3-5.5, 20 kHz resampled, no filter) per frequency band.
 
-python experiments/impact3/bands.py RUN.npz ... [exp]
+python -m verification.impact_study.bands RUN.npz ... [exp]
 """
 
 import sys
