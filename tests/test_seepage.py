@@ -11,7 +11,12 @@ from conftest import ENV, SCOURSPH, disordered_lattice, write_scene
 from solver.kernels import cubic_spline_normalisation
 from solver.materials import Phase
 from solver.neighbors import CellGrid, CellList
-from solver.physics.seepage import pore_pressure_at_soil, seepage_on_soil, seepage_on_water
+from solver.physics.seepage import (
+    pore_pressure_at_soil,
+    pore_pressure_at_water,
+    seepage_on_soil,
+    seepage_on_water,
+)
 from solver.plan import build_plan, explain
 from solver.scene import parse_scene
 from solver.simulation import Simulation
@@ -85,6 +90,30 @@ def test_pore_pressure_at_soil_matches_twin(rng, dim):
         s["soil"], s["water"], s["x"], s["rho"], s["mass"], s["p"], s["h"], dim, s["radius"]
     )
     np.testing.assert_allclose(_pore(s)[s["soil"]], expected[s["soil"]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pore_pressure_at_water_matches_twin(rng, dim):
+    """p^ on water rows from the soil's p~ (the buoyancy pair's water side), p itself for water
+    with no soil within reach (one water particle moved far away)."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    s["x"][0] += 10.0
+    radius = s["radius"]
+    cells = CellList(CellGrid.covering(np.full(dim, -1.0), np.full(dim, 11.0), radius, pad=radius))
+    cells.bin(s["x"], len(s["x"]))
+    phase = np.where(s["material"] == 0, 0, 1).astype(np.int32)
+    s["on_soil"] = cells.neighbour_list(s["x"], s["soil"].astype(np.int64), radius, phase, 0)
+    on_water = cells.neighbour_list(s["x"], s["water"].astype(np.int64), radius, phase, 1)
+    pore = _pore(s)
+    expected = naive_seepage.pore_pressure_at_water(
+        s["water"], s["soil"], s["x"], s["rho"], s["mass"], s["p"], pore, s["h"], dim, radius
+    )
+    pore_pressure_at_water(
+        on_water.targets, on_water.start, on_water.index, s["x"], s["rho"], s["mass"], s["p"], s["h"],
+        s["norm"], pore, True if dim == 3 else None,
+    )  # fmt: skip
+    np.testing.assert_allclose(pore, expected, rtol=1e-12)
+    assert pore[0] == s["p"][0]
 
 
 @pytest.mark.parametrize("dim,mixture", [(2, True), (2, False), (3, True)])

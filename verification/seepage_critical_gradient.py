@@ -80,21 +80,27 @@ def dry_weight_gradient():
 
 
 def geometry(dx):
-    baffle = 3 * dx
+    baffle = 4 * dx
     return {"baffle": (W_L, W_L + baffle), "sample": (W_L + baffle, W_L + baffle + W_R),
             "width": W_L + baffle + W_R}  # fmt: skip
 
 
-def baffle_material(formulation):
-    """The baffle's wall particles: frozen pore water. In the mixture form pore water has the
-    apparent density n rho_w and its EOS p = B [(rho / (n rho_w))^7 - 1] with the water's B: a wall of
-    free water (rho_w) next to it is a density jump of 2.5 that the wall particles' continuity
-    turned into a growing oscillation of the pore water along the wall (blow-up at 0.14 s); a wall
-    material of density n rho_w and the same B (c_b = c / sqrt(n)) is the pore water frozen."""
-    if formulation == "seed":
-        return sc.WATER
-    c_b = sc.WATER["typical_velocity"] / POROSITY**0.5
-    return {**sc.WATER, "density": POROSITY * sc.RHO_W, "typical_velocity": c_b}
+def baffle_blocks(dx, h_left, top):
+    """The baffle: four columns of wall particles (fixed free water), the two on each side started
+    at the hydrostatic pressure of the water beside them (the left leg's, up to h_left; the
+    sample's, up to its top F + L) and at p = 0 above that level. Wall particles get
+    their pressure from the continuity equation alone, so a baffle started at p = 0 is a pressure
+    sink of the full hydrostatic head next to the pore water (docs/seepage.md, "Pore water along
+    a wall")."""
+    x0 = geometry(dx)["baffle"][0]
+    blocks = []
+    for k, level in enumerate((h_left, F + L)):
+        xs = [x0 + 2 * k * dx, x0 + 2 * (k + 1) * dx]
+        wall = {"material": "baffle", "shape": "rectangle", "fixed": True}
+        blocks.append({**wall, "name": f"baffle{k}", "hydrostatic": True, "min": [xs[0], F],
+                       "max": [xs[1], level]})  # fmt: skip
+        blocks.append({**wall, "name": f"baffle{k}_dry", "min": [xs[0], level], "max": [xs[1], top]})
+    return blocks
 
 
 def head_level(ratio):
@@ -113,12 +119,10 @@ def scene(resolution, ratio, formulation="mixture", t_end=T_END):
     blocks = [
         {**fixed, "name": "filter", "material": "filter", "min": [0.0, 0.0], "max": [geo["width"], F]},
         {**fixed, "name": "left_leg", "material": "filter", "min": [0.0, F], "max": [W_L, h_left]},
-        {"name": "baffle", "material": "baffle", "shape": "rectangle", "fixed": True,
-         "min": [geo["baffle"][0], F], "max": [geo["baffle"][1], top]},
         {"name": "sample", "material": "sand", "shape": "rectangle", "min": [x0, F], "max": [x1, F + L],
          "saturated": True, "geostatic": True, "water_table": F + L, "pore_water": "water"},
-    ]  # fmt: skip
-    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER, "baffle": baffle_material(formulation)}
+    ] + baffle_blocks(dx, h_left, top)  # fmt: skip
+    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER, "baffle": sc.WATER}
     walls = {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"}
     return sc.scene("seepage_critical_gradient", dx, t_end, [geo["width"], top + 0.02], mats, blocks,
                     formulation, walls)  # fmt: skip

@@ -239,6 +239,30 @@ def _storage(a, first, last, index, x, v, rho, mass, material, grain_density, h,
     return -rho[a] * phi / (1.0 - phi) * div
 
 
+@kernel(parallel=True)
+def pore_pressure_at_water(targets, start, index, x, rho, mass, p, h, norm, pore, is3d=None):
+    """p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over the soil neighbours b of water a (the soil's
+    Shepard pore pressure smoothed back onto the water), written into pore[a]; p_a itself for water
+    with no soil within reach (it is in no coupling pair then). The buoyancy pair uses p^_a, not
+    p_a: with p_a a water particle whose soil support is cut (next to a wall of water particles)
+    feels its own pressure, -(1 - n) p_a sum_b V_b grad_a W_ab, which pushes a compressed particle
+    into the wall (docs/seepage.md, "Pore water along a wall")."""
+    for t in prange(targets.shape[0]):
+        a = targets[t]
+        num = den = 0.0
+        for s in range(start[t], start[t + 1]):
+            b = index[s]
+            d0 = x[a, 0] - x[b, 0]
+            d1 = x[a, 1] - x[b, 1]
+            d2 = 0.0
+            if is3d is not None:
+                d2 = x[a, 2] - x[b, 2]
+            w = mass[b] / rho[b] * cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
+            num += w * pore[b]
+            den += w
+        pore[a] = num / den if den > 0.0 else p[a]
+
+
 class PorePressureAtSoil(Term):
     """p~ at every owned soil particle from its water neighbours (mixture buoyancy)."""
 
@@ -267,6 +291,37 @@ class PorePressureAtSoil(Term):
         )  # fmt: skip
 
 
+class PorePressureAtWater(Term):
+    """p^ at every owned water particle from the p~ of its soil neighbours (mixture buoyancy): the
+    pair's water-side pressure, so no water particle feels its own pressure through a cut support."""
+
+    name = "pore pressure at water"
+    stage = Stage.STATE
+    targets = Phase.WATER
+    neighbours = Phase.SOIL
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls() if settings is not None and settings.mixture else None
+
+    def __init__(self):
+        super().__init__()
+        self.fields = {"pore_pressure": PORE_PRESSURE}
+        self.reads = ("x", "rho", "mass", "p", "pore_pressure")
+        self.writes = ("pore_pressure",)
+        self.equations = (
+            Equation("p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over soil b", "Shepard interpolation"),
+        )
+
+    def run(self, ctx):
+        ps, nl = ctx.particles, ctx.neighbours(self)
+        pore_pressure_at_water(
+            nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["p"], ctx.h, ctx.norm,
+            ps["pore_pressure"], ctx.is3d,
+        )  # fmt: skip
+
+
 class _Coupling(Term):
     """What the two sides of the coupling share."""
 
@@ -275,9 +330,7 @@ class _Coupling(Term):
     def __init__(self, settings: SeepageSettings):
         super().__init__()
         self.settings = settings
-        self.reads = ("x", "v", "rho", "mass", "material") + (
-            ("p", "pore_pressure") if settings.mixture else ()
-        )
+        self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
         equations = [
@@ -312,7 +365,7 @@ class SeepageOnSoil(_Coupling):
         mix = st.mixture
         ctx.shared["seepage soil rate"] = seepage_on_soil(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
-            st.solid, ctx.h, ctx.norm, ps["acc"], ps["p"] if mix else None,
+            st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if mix else None,
             ps["pore_pressure"] if mix else None, ctx.is3d,
         )  # fmt: skip
 
@@ -353,5 +406,5 @@ class SeepageOnWater(_Coupling):
         self.lam = seepage_on_water(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
-            ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["pore_pressure"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
         )  # fmt: skip
