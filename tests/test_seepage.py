@@ -139,6 +139,33 @@ def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
         assert not drho.any()
 
 
+def test_wall_particles_take_no_part_in_the_coupling(rng):
+    """Water particles flagged as walls (fixed water blocks) neither push nor are pushed: the rates
+    equal the twin's over the other water particles alone (docs/seepage.md, "Pore water along a wall")."""
+    s = two_phase(rng)
+    wall = np.zeros(len(s["x"]), dtype=bool)
+    wall[s["water"][rng.random(len(s["water"])) < 0.3]] = True
+    pore = _pore(s)
+    n, dim = len(s["x"]), s["dim"]
+    acc, drho = np.zeros((n, dim)), np.zeros(n)
+    seepage_on_soil(
+        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], s["solid"], s["h"], s["norm"], acc, s["p"], pore, None, wall,
+    )  # fmt: skip
+    seepage_on_water(
+        s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], s["solid"], s["grain"], s["h"], s["norm"], acc, drho, s["p"], pore, None,
+        wall,
+    )  # fmt: skip
+    free = s["water"][~wall[s["water"]]]
+    exp_acc, _, _ = naive_seepage.seepage_accelerations(
+        s["soil"], free, s["x"], s["v"], s["rho"], s["mass"], s["material"], s["p"], pore, s["drag"],
+        s["solid"], s["h"], dim, s["radius"],
+    )  # fmt: skip
+    np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * np.abs(exp_acc).max())
+    assert not drho[wall].any() and drho[free].any()
+
+
 @pytest.mark.parametrize("mixture", [True, False])
 def test_pair_forces_are_equal_and_opposite(rng, mixture):
     """sum_i m_i a_i over both phases = 0 to round-off: each pair's force is one expression

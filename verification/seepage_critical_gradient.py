@@ -60,6 +60,7 @@ K_FILTER = 300 * K
 E = 1.0e6
 T_END = 0.4
 T_GRAD0, T_GRAD1 = 0.1, 0.2
+QUICK = 0.1  # sigma'_v / gamma' z below which the sample is quick (its effective stress gone), see docstring
 HEAVE_DX = 0.1  # rise of the top row, in dx, that counts as heave (30 x the elastic swelling)
 ONSET_TOLERANCE = 0.10  # issue 10
 DEFAULT_RESOLUTION = 12  # dx = 5 mm
@@ -69,6 +70,7 @@ NIGHTLY_RATIOS = {"mixture": (0.6, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 1.5), "seed":
 OUT = RESULTS / "seepage_critical_gradient"
 SAND = sc.sand(POROSITY, G_S * sc.RHO_W, K, youngs_modulus=E)
 FILTER = sc.sand(POROSITY, G_S * sc.RHO_W, K_FILTER, youngs_modulus=E)
+GAMMA_B = sc.buoyant_unit_weight(SAND)  # gamma'
 
 
 def critical_gradient():
@@ -162,7 +164,12 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
         table = float(y_l.max()) if len(y_l) else np.nan
         in_leg = (y_l > F + 2 * s.h) & (y_l < table - 2 * s.h)
         h_left = float(np.mean(y_l[in_leg] + p_["p"][left][in_leg] / sc.GAMMA_W)) if in_leg.any() else np.nan
-        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s
+        y_s = p_["x"][so, 1]
+        inner = (y_s > F + 2 * s.h) & (y_s < F + L - 2 * s.h)  # stress: away from the truncated ends
+        geo = GAMMA_B * (F + L - y_s[inner])
+        sv = sc.vertical_effective_stress(s, so)[inner]
+        stress = float(sv.sum() / geo.sum()) if inner.any() else np.nan
+        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s, stress
 
     times = np.linspace(0.0, t_end, 21)
     obs, wall, cpu = sc.run_timed(sim, times, observe)
@@ -170,12 +177,13 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
     i = float(np.nanmean([o[1] for o, w in zip(obs, window) if w]))
     q = float(np.nanmean([o[2] for o, w in zip(obs, window) if w]))
     i_s = float(np.nanmean([o[3] for o, w in zip(obs, window) if w]))
+    stress = float(np.nanmean([o[4] for o, w in zip(obs, window) if w]))
     rise = np.array([o[0] for o in obs])
     return {
         "formulation": formulation, "ratio_aimed": ratio, "dx": dx, "particles": ps.n_owned,
         "steps": sim.step_count, "wall": wall, "cpu": cpu, "i": i, "i_over_ic": i / critical_gradient(),
         "q": q, "i_sample": i_s, "t": times, "rise": rise, "rise_dx": float(rise[-1] / dx),
-        "heave": bool(rise[-1] > HEAVE_DX * dx),
+        "rise_heave": bool(rise[-1] > HEAVE_DX * dx), "stress_ratio": stress, "heave": bool(stress < QUICK),
     }  # fmt: skip
 
 

@@ -43,6 +43,7 @@ from ..particles import FieldSpec, Mirror
 from ..scene import Seepage, Soil
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
     0, np.float64, "pore pressure interpolated at soil particles (mixture buoyancy)", Mirror.SCALAR
@@ -58,6 +59,7 @@ class SeepageSettings:
     solid: np.ndarray  # 1 - n of each soil material (mixture buoyancy), 0 in the seed form
     grain_density: np.ndarray  # rho_grain = rho_dry / (1 - n), for the solid fraction at water
     cfl_drag: float
+    walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
 
     @classmethod
     def of(cls, scene, materials):
@@ -78,7 +80,8 @@ class SeepageSettings:
             drag[k] = (n if form == Seepage.SEED else n * n) * gamma_w / perm
             solid[k] = 0.0 if form == Seepage.SEED else 1.0 - n
             grain[k] = mat.density / (1.0 - n)
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag)
+        walls = any(b.fixed and scene.materials[b.material].model == "water" for b in scene.blocks)
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, walls)
 
     @property
     def mixture(self):
@@ -123,9 +126,11 @@ def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore,
 
 @kernel(parallel=True)
 def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, p=None,
-                    pore=None, is3d=None):  # fmt: skip
+                    pore=None, is3d=None, wall=None):  # fmt: skip
     """Soil rows b: add sum_a F_ab / m_b (pair_force) over water neighbours a; returns the largest
-    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy)."""
+    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy).
+    wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are walls,
+    not pore water, and take no part in the coupling."""
     worst = 0.0
     for t in prange(targets.shape[0]):
         b = targets[t]
@@ -135,6 +140,8 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
         p_b = pore[b] if pore is not None else 0.0
         for s in range(start[t], start[t + 1]):
             a = index[s]
+            if wall is not None and wall[a]:
+                continue
             d2 = u2 = 0.0
             if is3d is not None:
                 d2 = x[b, 2] - x[a, 2]
@@ -159,7 +166,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
 
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, drho=None, p=None, pore=None, is3d=None):  # fmt: skip
+                     acc, drho=None, p=None, pore=None, is3d=None, wall=None):  # fmt: skip
     """Water rows a: add -sum_b F_ab / m_a (pair_force) over soil neighbours b; returns the largest
     lambda_a = sum_b K_ab / m_a. With drho (mixture), also Biot's storage term
     drho_a += -rho_a (phi_a / n_a) div v_s(x_a), phi_a = sum_b (m_b / rho_grain) W_ab the solid
@@ -167,6 +174,8 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
     worst = 0.0
     for t in prange(targets.shape[0]):
         a = targets[t]
+        if wall is not None and wall[a]:
+            continue  # a wall particle (seepage_on_soil)
         vol_a = mass[a] / rho[a]
         p_a = p[a] if p is not None else 0.0
         f0 = f1 = f2 = lam = 0.0
@@ -331,6 +340,9 @@ class _Coupling(Term):
         super().__init__()
         self.settings = settings
         self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
+        if settings.walls:  # wall particles of fixed water blocks are walls, not pore water
+            self.fields = {"fixed": FIXED}
+            self.reads += ("fixed",)
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
         equations = [
@@ -366,7 +378,7 @@ class SeepageOnSoil(_Coupling):
         ctx.shared["seepage soil rate"] = seepage_on_soil(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if mix else None,
-            ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["pore_pressure"] if mix else None, ctx.is3d, ps["fixed"] if st.walls else None,
         )  # fmt: skip
 
 
@@ -407,4 +419,5 @@ class SeepageOnWater(_Coupling):
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["pore_pressure"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["fixed"] if st.walls else None,
         )  # fmt: skip
