@@ -5,8 +5,9 @@ water ever enters pores: see seepage_darcy.py, "Why a draining column"):
   * a fixed, saturated coarse filter (k_f = 300 k) F = 0.03 m deep over the whole tank floor;
   * the left leg: a fixed, saturated coarse column W_L wide from the filter up to the head
     level H_L (its water table);
-  * a baffle of wall particles (a fixed water block, 3 dx thick) from the filter to above both
-    water levels, between the legs;
+  * a baffle of wall particles (fixed free water, 4 dx thick) from the filter to above both water
+    levels, between the legs, each side started at the hydrostatic pressure of the water beside it
+    (`baffle_blocks`); wall particles take no part in the seepage coupling (docs/seepage.md);
   * the right leg: a free, saturated sand sample L = 0.06 m tall on the filter, its water table
     at its own top (the water that seeps out of it spills over its surface).
 The head difference H_L - (F + L) drives water down the left leg, along the filter and up
@@ -19,12 +20,16 @@ its pore pressure, i_s = -(1 + dp/dy / gamma_w), is reported next to i. (A heavi
 carries no more than i_c itself: once its effective stress is gone the excess head goes to the
 filter, so i_s cannot define the onset.)
 
-Heave (the sample's buoyant weight carried by the seepage force, Terzaghi 1943): the mean height
-of the sample's top row rises by more than HEAVE_DX = 0.1 dx over the run. Below i_c the skeleton
-keeps carrying (gamma' - gamma_w i) per unit volume and barely moves: its elastic swelling is
-r gamma' L^2 / (2 E_oed) = 0.003 dx at r = i / i_c = 0.95 (E = 1 MPa). Above it the sample rises
-until the left leg has fallen to the critical head: at most n (i - i_c) L W_L / W_R, 0.2 dx at
-r = 1.05 (the left leg is the only supply; a wider one costs particles).
+Heave (Terzaghi 1943): the sample's buoyant weight carried by the seepage force, i.e. its effective
+stress gone (the quick condition): sigma'_v = (gamma' - gamma_w i) z -> 0. Measured as the ratio of
+the vertical effective stress of the skeleton in the sample's interior band (>= 2h from its ends) to
+its geostatic value gamma' z (`stress_ratio`, window mean); heave when it is below QUICK = 0.1
+(within 10 % of i_c on Terzaghi's line 1 - i / i_c, the issue's tolerance). The rise of the top row
+is reported too (`rise_dx`; `rise_heave` when above HEAVE_DX = 0.1 dx): above i_c a free sample
+should rise until the left leg has fallen to the critical head, at most n (i - i_c) L W_L / W_R
+(0.2 dx at 1.05 i_c), but at dx = 5 mm no run rose by 0.1 dx up to 1.29 i_c (docs/seepage.md).
+The measured i is ~13 % below the aimed one: the left leg's head is 1.5 dx below its lattice
+water table (SPH free-surface truncation), hence aims above 1 for runs near i_c.
 
 Reference: i_c = gamma' / gamma_w = (1 - n)(G_s - 1) = 0.99 (n = 0.4, G_s = 2.65). Check
 (issue): the onset, bracketed by the largest gradient without heave and the smallest with heave,
@@ -65,8 +70,9 @@ HEAVE_DX = 0.1  # rise of the top row, in dx, that counts as heave (30 x the ela
 ONSET_TOLERANCE = 0.10  # issue 10
 DEFAULT_RESOLUTION = 12  # dx = 5 mm
 STUDY_RESOLUTIONS = (12, 24)
-CI_RATIOS = {"mixture": (0.95, 1.08), "seed": (1.1,)}  # i / i_c aimed at (the head set from them)
-NIGHTLY_RATIOS = {"mixture": (0.6, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 1.5), "seed": (1.1, 1.4, 1.55, 1.7, 1.8)}
+# i / i_c aimed at (the head set from them); at dx = 5 mm the measured i is ~0.87 of the aim (docstring)
+CI_RATIOS = {"mixture": (1.1, 1.2, 1.3), "seed": (1.3,)}
+NIGHTLY_RATIOS = {"mixture": (0.9, 1.05, 1.1, 1.2, 1.3, 1.4, 1.6), "seed": (1.3, 1.6, 1.8, 2.0, 2.2)}
 OUT = RESULTS / "seepage_critical_gradient"
 SAND = sc.sand(POROSITY, G_S * sc.RHO_W, K, youngs_modulus=E)
 FILTER = sc.sand(POROSITY, G_S * sc.RHO_W, K_FILTER, youngs_modulus=E)
@@ -197,7 +203,8 @@ def run_or_blow_up(resolution, ratio, formulation):
         return {"formulation": formulation, "ratio_aimed": ratio, "dx": L / resolution, "particles": 0,
                 "steps": exc.step, "wall": 0.0, "cpu": 0.0, "i": np.nan,
                 "i_over_ic": np.nan, "q": np.nan, "i_sample": np.nan, "t": np.zeros(0), "rise": np.zeros(0),
-                "rise_dx": np.nan, "heave": None, "blow_up": str(exc)}  # fmt: skip
+                "rise_dx": np.nan, "heave": None, "rise_heave": None, "stress_ratio": np.nan,
+                "blow_up": str(exc)}  # fmt: skip
 
 
 def onset_bracket(runs):
@@ -223,7 +230,8 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=None):
         f"{f}, aimed at {r['ratio_aimed']:g} i_c: BLEW UP: {r['blow_up']}" if "blow_up" in r else
         f"{f}: i = {r['i']:.3f} ({r['i_over_ic']:.3f} i_c; in the sample {r['i_sample']:.3f}), "
         f"q = {r['q']:.3g} m/s (k i_s = {K * r['i_sample']:.3g}), "
-        f"top rise {r['rise_dx']:.3g} dx -> {'heave' if r['heave'] else 'stable'}; {r['steps']} steps, "
+        f"sigma'_v / gamma' z = {r['stress_ratio']:.3f} -> {'quick (heave)' if r['heave'] else 'stable'}, "
+        f"top rise {r['rise_dx']:.3g} dx; {r['steps']} steps, "
         f"{r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU"
         for f, rs in runs.items()
         for r in rs
@@ -260,16 +268,18 @@ def figure(runs, path):
     marks = {"mixture": "bo", "seed": "rs"}
     i_c = critical_gradient()
     for f, rs in runs.items():
-        ratios, rises = [r["i"] / i_c for r in rs], [r["rise_dx"] for r in rs]
-        axs[0].plot(ratios, rises, marks[f], mfc="none", ms=8, label=f)
+        ratios, stress = [r["i"] / i_c for r in rs], [r["stress_ratio"] for r in rs]
+        axs[0].plot(ratios, stress, marks[f], mfc="none", ms=8, label=f)
         for r in rs:
             axs[1].plot(r["t"], r["rise"] / r["dx"], marks[f][0] + "-", lw=1)
     axs[0].axvline(1.0, color="k", lw=1, label="i_c")
     axs[0].axvline(dry_weight_gradient() / i_c, color="r", ls="--", lw=1, label="dry weight (seed)")
     axs[0].axvspan(0.9, 1.1, color="0.9", label="10 %")
-    axs[0].axhline(HEAVE_DX, color="k", ls=":", lw=1, label="heave threshold")
-    axs[0].set(xlabel="measured i / i_c", ylabel="rise of the sample top / dx", yscale="symlog",
-               title="upward seepage: heave at the end of the run")  # fmt: skip
+    axs[0].axhline(QUICK, color="k", ls=":", lw=1, label="quick threshold")
+    r_line = np.linspace(0.0, 2.0, 3)
+    axs[0].plot(r_line, np.maximum(1.0 - r_line, 0.0), "k-", lw=0.8, label="Terzaghi 1 - i/i_c")
+    axs[0].set(xlabel="measured i / i_c", ylabel="sigma'_v / gamma' z in the sample", ylim=(-0.1, 1.8),
+               title="upward seepage: effective stress (window mean)")  # fmt: skip
     axs[1].set(xlabel="t (s)", ylabel="rise / dx", yscale="symlog", title="rise of the sample top")
     for ax in axs:
         ax.grid(alpha=0.3)
@@ -288,6 +298,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                              "particles": r["particles"], "steps": r["steps"], "wall_time_s": r["wall"],
                              "cpu_time_s": r["cpu"], "i_aimed_over_ic": ratio, "i_over_ic": r["i_over_ic"],
                              "i_sample_over_ic": r["i_sample"] / critical_gradient(),
+                             "stress_ratio": r["stress_ratio"],
                              "q_over_k_i_sample": r["q"] / (K * r["i_sample"]), "rise_dx": r["rise_dx"],
                              "heave": -1 if r["heave"] is None else int(r["heave"])})  # fmt: skip
     save_study(rows, out_dir, "resolution_study")
