@@ -5,9 +5,10 @@ water ever enters pores: see seepage_darcy.py, "Why a draining column"):
   * a fixed, saturated coarse filter (k_f = 300 k) F = 0.03 m deep over the whole tank floor;
   * the left leg: a fixed, saturated coarse column W_L wide from the filter up to the head
     level H_L (its water table);
-  * a baffle of wall particles (fixed free water, 4 dx thick) from the filter to above both water
-    levels, between the legs, each side started at the hydrostatic pressure of the water beside it
-    (`baffle_blocks`); wall particles take no part in the seepage coupling (docs/seepage.md);
+  * a baffle 6 dx thick from the filter to above both water levels, between the legs
+    (`baffle_blocks`): wall particles of fixed free water, started at the hydrostatic pressure of
+    the water beside them (they take no part in the seepage coupling, docs/seepage.md), and on the
+    sample's side 2 dx of fixed saturated sand: a wall for the skeleton, pores for the water;
   * the right leg: a free, saturated sand sample L = 0.06 m tall on the filter, its water table
     at its own top (the water that seeps out of it spills over its surface).
 The head difference H_L - (F + L) drives water down the left leg, along the filter and up
@@ -88,7 +89,7 @@ def dry_weight_gradient():
 
 
 def geometry(dx):
-    baffle = 4 * dx
+    baffle = 6 * dx
     return {"baffle": (W_L, W_L + baffle), "sample": (W_L + baffle, W_L + baffle + W_R),
             "width": W_L + baffle + W_R}  # fmt: skip
 
@@ -96,10 +97,11 @@ def geometry(dx):
 def baffle_blocks(dx, h_left, top):
     """The baffle: four columns of wall particles (fixed free water), the two on each side started
     at the hydrostatic pressure of the water beside them (the left leg's, up to h_left; the
-    sample's, up to its top F + L) and at p = 0 above that level. Wall particles get
-    their pressure from the continuity equation alone, so a baffle started at p = 0 is a pressure
-    sink of the full hydrostatic head next to the pore water (docs/seepage.md, "Pore water along
-    a wall")."""
+    sample's, up to its top F + L) and at p = 0 above that level, then two columns of fixed saturated
+    sand beside the sample. Wall particles get their pressure from the continuity equation alone,
+    so a baffle started at p = 0 is a pressure sink of the full hydrostatic head next to the pore
+    water; fixed water is no wall for soil, so without the sand columns the sample's skeleton crept
+    into the baffle (docs/seepage.md, case 4)."""
     x0 = geometry(dx)["baffle"][0]
     blocks = []
     for k, level in enumerate((h_left, F + L)):
@@ -108,6 +110,13 @@ def baffle_blocks(dx, h_left, top):
         blocks.append({**wall, "name": f"baffle{k}", "hydrostatic": True, "min": [xs[0], F],
                        "max": [xs[1], level]})  # fmt: skip
         blocks.append({**wall, "name": f"baffle{k}_dry", "min": [xs[0], level], "max": [xs[1], top]})
+    # the sample's side: a fixed, saturated sand wall (2 dx): a wall for the skeleton, pores for the water
+    xs = [x0 + 4 * dx, x0 + 6 * dx]
+    blocks.append({"name": "soil_wall", "material": "sand", "shape": "rectangle", "fixed": True,
+                   "saturated": True, "water_table": F + L, "pore_water": "water", "min": [xs[0], F],
+                   "max": [xs[1], F + L]})  # fmt: skip
+    blocks.append({"material": "baffle", "shape": "rectangle", "fixed": True, "name": "soil_wall_dry",
+                   "min": [xs[0], F + L], "max": [xs[1], top]})  # fmt: skip
     return blocks
 
 
@@ -175,7 +184,8 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
         geo = GAMMA_B * (F + L - y_s[inner])
         sv = sc.vertical_effective_stress(s, so)[inner]
         stress = float(sv.sum() / geo.sum()) if inner.any() else np.nan
-        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s, stress
+        slope = -np.polyfit(y_s[inner], sv, 1)[0] / GAMMA_B if inner.sum() > 2 else np.nan
+        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s, stress, slope
 
     times = np.linspace(0.0, t_end, 21)
     obs, wall, cpu = sc.run_timed(sim, times, observe)
@@ -184,12 +194,14 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
     q = float(np.nanmean([o[2] for o, w in zip(obs, window) if w]))
     i_s = float(np.nanmean([o[3] for o, w in zip(obs, window) if w]))
     stress = float(np.nanmean([o[4] for o, w in zip(obs, window) if w]))
+    slope = float(np.nanmean([o[5] for o, w in zip(obs, window) if w]))
     rise = np.array([o[0] for o in obs])
     return {
         "formulation": formulation, "ratio_aimed": ratio, "dx": dx, "particles": ps.n_owned,
         "steps": sim.step_count, "wall": wall, "cpu": cpu, "i": i, "i_over_ic": i / critical_gradient(),
         "q": q, "i_sample": i_s, "t": times, "rise": rise, "rise_dx": float(rise[-1] / dx),
-        "rise_heave": bool(rise[-1] > HEAVE_DX * dx), "stress_ratio": stress, "heave": bool(stress < QUICK),
+        "rise_heave": bool(rise[-1] > HEAVE_DX * dx), "stress_ratio": stress, "stress_slope": slope,
+        "heave": bool(stress < QUICK),
     }  # fmt: skip
 
 
