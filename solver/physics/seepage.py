@@ -9,7 +9,7 @@ conserved pair by pair (docs/seepage.md derives each term):
 
   drag       F_ab = V_a V_b C W_ab (v_a - v_b)                    C = n gamma_w / k    ("seed")
                                                                  C = n^2 gamma_w / k  ("mixture")
-  buoyancy   F_ab = -(1 - n) V_a V_b (p_a - p~_b) grad_b W_ab      ("mixture" only)
+  buoyancy   F_ab = -(1 - n) V_a V_b (p^_a - p~_b) grad_b W_ab     ("mixture" only)
 
 with F_ab the force on soil b, the water getting -F_ab. "seed" is exactly the seed's eqs. (18),
 (20), (21) with the erratum of DESIGN.md (the sums run over the other phase with one pair value of
@@ -18,11 +18,14 @@ mixture form is Biot's (1941) two-phase mixture as used in SPH by Bui & Nguyen (
 Solids Struct. 125:244): per unit mixture volume the skeleton feels div sigma' - (1 - n) grad p + R
 and the water -n grad p - R, R = n^2 gamma_w (v_w - v_s) / k (Biot/Prevost drag, Morikawa & Asai
 2022 eqs. 7, 9). The water's own pass gives -grad p; the pair buoyancy, a difference-form gradient
-of p with p~_b the pore pressure interpolated at the soil particle (Shepard), gives -(1 - n) grad p
-to the skeleton and +(1 - n) grad p to the water. In the mixture form the water's continuity also
-feels the pores squeezed by the skeleton (Biot's storage: D ln rho_w/Dt gets -(phi/n) div v_s,
-phi = 1 - n the solid fraction at the water particle), which is what drives consolidation, and
-pore water starts at n rho_w with that as its EOS reference (tait_eos.py: p from rho / rho_ref).
+of p with p~_b the pore pressure interpolated at the soil particle (Shepard) and p^_a that
+interpolated back at the water particle (so no water particle feels its own pressure through a
+support cut by a wall), gives -(1 - n) grad p to the skeleton and +(1 - n) grad p to the water.
+Wall particles of fixed water blocks take no part in the pairs (they are walls, not pore water).
+In the mixture form the water's continuity also feels the pores squeezed by the skeleton (Biot's
+storage: D ln rho_w/Dt gets -(phi/n) div v_s, phi = 1 - n the solid fraction at the water
+particle), which is what drives consolidation, and pore water starts at n rho_w with that as its
+EOS reference (tait_eos.py: p from rho / rho_ref).
 
 The drag is explicit and its stiffness limits the step: the relaxation rate of a pair's relative
 velocity is lambda = lambda_a + lambda_b, lambda_i = sum_j K_ij / m_i (~ n g / k (1 + n rho_w /
@@ -353,7 +356,7 @@ class _Coupling(Term):
         if settings.mixture:
             equations.append(
                 Equation(
-                    "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+                    "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
                     "Bui & Nguyen (2017)",
                 )
             )
