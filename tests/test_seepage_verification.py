@@ -112,15 +112,11 @@ def test_critical_gradient_mixture_runs_and_loses_effective_stress(critical_mixt
 
 
 @pytest.mark.nightly
-@pytest.mark.xfail(
-    strict=True,
-    reason="known shortfall (docs/seepage.md, case 4): at dx = 5 mm the quick condition is reached "
-    "between 0.97 and 1.14 i_c, not within 10 % of i_c: the top rows keep ~0.3 gamma' z of effective "
-    "stress at the outflow surface (the interior slope of sigma'_v vanishes at ~0.94 i_c)",
-)
 def test_critical_gradient_onset_mixture():
-    """dx = 5 mm: the onset bracket of the quick condition within 10 % of i_c (mixture)."""
-    res = seepage_critical_gradient.run(12, ratios={"mixture": (1.1, 1.2, 1.3), "seed": ()})
+    """dx = 2.5 mm (the case's default): the onset bracket of the quick condition within 10 % of
+    i_c (measured [0.914, 1.034] i_c; at 5 mm the outflow surface's stress offset puts the quick
+    condition at 1.14 i_c, docs/seepage.md, case 4)."""
+    res = seepage_critical_gradient.run(24, ratios={"mixture": (0.95, 1.1), "seed": ()})
     assert not _failed(res), "\n".join(_failed(res))
 
 
@@ -131,7 +127,7 @@ CASES = [
     seepage_bed_at_rest,
     seepage_darcy,
     pytest.param(seepage_terzaghi, marks=KNOWN),
-    pytest.param(seepage_critical_gradient, marks=KNOWN),
+    seepage_critical_gradient,
 ]
 
 

@@ -29,8 +29,11 @@ its geostatic value gamma' z (`stress_ratio`, window mean); heave when it is bel
 is reported too (`rise_dx`; `rise_heave` when above HEAVE_DX = 0.1 dx): above i_c a free sample
 should rise until the left leg has fallen to the critical head, at most n (i - i_c) L W_L / W_R
 (0.2 dx at 1.05 i_c), but at dx = 5 mm no run rose by 0.1 dx up to 1.29 i_c (docs/seepage.md).
-The measured i is ~13 % below the aimed one: the left leg's head is 1.5 dx below its lattice
-water table (SPH free-surface truncation), hence aims above 1 for runs near i_c.
+The measured i is below the aimed one (0.87 of it at 5 mm, 0.94 at 2.5 mm): the left leg's head
+is ~1.5 dx below its lattice water table (SPH free-surface truncation). The same truncation at
+the sample's outflow surface leaves the top rows carrying ~1.9 dx of buoyant overburden, an
+offset of the stress ratio that halves with dx (0.3 at 5 mm, ~0.1 at 2.5 mm): the check is made
+at 2.5 mm (DEFAULT_RESOLUTION), where the bracket is [0.914, 1.034] i_c.
 
 Reference: i_c = gamma' / gamma_w = (1 - n)(G_s - 1) = 0.99 (n = 0.4, G_s = 2.65). Check
 (issue): the onset, bracketed by the largest gradient without heave and the smallest with heave,
@@ -69,11 +72,12 @@ T_GRAD0, T_GRAD1 = 0.1, 0.2
 QUICK = 0.1  # sigma'_v / gamma' z below which the sample is quick (its effective stress gone), see docstring
 HEAVE_DX = 0.1  # rise of the top row, in dx, that counts as heave (30 x the elastic swelling)
 ONSET_TOLERANCE = 0.10  # issue 10
-DEFAULT_RESOLUTION = 12  # dx = 5 mm
+DEFAULT_RESOLUTION = 24  # dx = 2.5 mm: at 5 mm the outflow surface's stress offset fails the check
 STUDY_RESOLUTIONS = (12, 24)
 # i / i_c aimed at (the head set from them); at dx = 5 mm the measured i is ~0.87 of the aim (docstring)
-CI_RATIOS = {"mixture": (1.1, 1.2, 1.3), "seed": (1.3,)}
-NIGHTLY_RATIOS = {"mixture": (0.9, 1.05, 1.1, 1.2, 1.3, 1.4, 1.6), "seed": (1.3, 1.6, 1.8, 2.0, 2.2)}
+# (at 2.5 mm 0.94 of it); the default run's pair brackets i_c at 2.5 mm (docs/seepage.md, case 4)
+CI_RATIOS = {"mixture": (0.95, 1.1), "seed": (1.3,)}
+NIGHTLY_RATIOS = {"mixture": (0.9, 0.95, 1.1, 1.2, 1.4), "seed": (1.3, 1.8, 2.2)}
 OUT = RESULTS / "seepage_critical_gradient"
 SAND = sc.sand(POROSITY, G_S * sc.RHO_W, K, youngs_modulus=E)
 FILTER = sc.sand(POROSITY, G_S * sc.RHO_W, K_FILTER, youngs_modulus=E)
