@@ -2,6 +2,7 @@
 of docs/seepage.md: all-pairs loops over the other phase, no neighbour lists.
 
   p~_b         = sum_a V_a p_a W_ab / sum_a V_a W_ab                     (Shepard, 0 if no water)
+  p^_a         = sum_b V_b p~_b W_ab / sum_b V_b W_ab                    (Shepard, p_a if no soil)
   F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p_a - p~_b) grad_b W_ab
                  (C = drag of b's material, phi = 1 - n in the mixture form, 0 in the seed's)
   soil b       acc += sum_a F_ab / m_b
@@ -25,6 +26,17 @@ def pore_pressure_at_soil(soil, water, x, rho, mass, p, h, dim, radius):
         inside = np.array([_within(x[a], x[b], radius) for a in water])
         w = np.where(inside, w, 0.0)
         out[b] = (w @ p[water]) / w.sum() if w.sum() > 0 else 0.0
+    return out
+
+
+def pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius):
+    """pore with p^_a written on the water rows (soil rows kept)."""
+    out = pore.copy()
+    for a in water:
+        w = np.array([mass[b] / rho[b] * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim) for b in soil])
+        inside = np.array([_within(x[a], x[b], radius) for b in soil])
+        w = np.where(inside, w, 0.0)
+        out[a] = (w @ pore[soil]) / w.sum() if w.sum() > 0 else p[a]
     return out
 
 

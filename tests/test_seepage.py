@@ -11,7 +11,12 @@ from conftest import ENV, SCOURSPH, disordered_lattice, write_scene
 from solver.kernels import cubic_spline_normalisation
 from solver.materials import Phase
 from solver.neighbors import CellGrid, CellList
-from solver.physics.seepage import pore_pressure_at_soil, seepage_on_soil, seepage_on_water
+from solver.physics.seepage import (
+    pore_pressure_at_soil,
+    pore_pressure_at_water,
+    seepage_on_soil,
+    seepage_on_water,
+)
 from solver.plan import build_plan, explain
 from solver.scene import parse_scene
 from solver.simulation import Simulation
@@ -87,6 +92,30 @@ def test_pore_pressure_at_soil_matches_twin(rng, dim):
     np.testing.assert_allclose(_pore(s)[s["soil"]], expected[s["soil"]], rtol=1e-12)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pore_pressure_at_water_matches_twin(rng, dim):
+    """p^ on water rows from the soil's p~ (the buoyancy pair's water side), p itself for water
+    with no soil within reach (one water particle moved far away)."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    s["x"][0] += 10.0
+    radius = s["radius"]
+    cells = CellList(CellGrid.covering(np.full(dim, -1.0), np.full(dim, 11.0), radius, pad=radius))
+    cells.bin(s["x"], len(s["x"]))
+    phase = np.where(s["material"] == 0, 0, 1).astype(np.int32)
+    s["on_soil"] = cells.neighbour_list(s["x"], s["soil"].astype(np.int64), radius, phase, 0)
+    on_water = cells.neighbour_list(s["x"], s["water"].astype(np.int64), radius, phase, 1)
+    pore = _pore(s)
+    expected = naive_seepage.pore_pressure_at_water(
+        s["water"], s["soil"], s["x"], s["rho"], s["mass"], s["p"], pore, s["h"], dim, radius
+    )
+    pore_pressure_at_water(
+        on_water.targets, on_water.start, on_water.index, s["x"], s["rho"], s["mass"], s["p"], s["h"],
+        s["norm"], pore, True if dim == 3 else None,
+    )  # fmt: skip
+    np.testing.assert_allclose(pore, expected, rtol=1e-12)
+    assert pore[0] == s["p"][0]
+
+
 @pytest.mark.parametrize("dim,mixture", [(2, True), (2, False), (3, True)])
 def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
     s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
@@ -108,6 +137,33 @@ def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
         np.testing.assert_allclose(drho, exp_drho, rtol=1e-10, atol=1e-12 * np.abs(exp_drho).max())
     else:
         assert not drho.any()
+
+
+def test_wall_particles_take_no_part_in_the_coupling(rng):
+    """Water particles flagged as walls (fixed water blocks) neither push nor are pushed: the rates
+    equal the twin's over the other water particles alone (docs/seepage.md, "Pore water along a wall")."""
+    s = two_phase(rng)
+    wall = np.zeros(len(s["x"]), dtype=bool)
+    wall[s["water"][rng.random(len(s["water"])) < 0.3]] = True
+    pore = _pore(s)
+    n, dim = len(s["x"]), s["dim"]
+    acc, drho = np.zeros((n, dim)), np.zeros(n)
+    seepage_on_soil(
+        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], s["solid"], s["h"], s["norm"], acc, s["p"], pore, None, wall,
+    )  # fmt: skip
+    seepage_on_water(
+        s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], s["solid"], s["grain"], s["h"], s["norm"], acc, drho, s["p"], pore, None,
+        wall,
+    )  # fmt: skip
+    free = s["water"][~wall[s["water"]]]
+    exp_acc, _, _ = naive_seepage.seepage_accelerations(
+        s["soil"], free, s["x"], s["v"], s["rho"], s["mass"], s["material"], s["p"], pore, s["drag"],
+        s["solid"], s["h"], dim, s["radius"],
+    )  # fmt: skip
+    np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * np.abs(exp_acc).max())
+    assert not drho[wall].any() and drho[free].any()
 
 
 @pytest.mark.parametrize("mixture", [True, False])
@@ -200,7 +256,7 @@ def test_seepage_terms_only_with_water_and_soil():
     from verification.column_collapse import scene_at
     from verification.common import scene_from_file
 
-    names = {"pore pressure at soil", "seepage on soil", "seepage on water"}
+    names = {"pore pressure at soil", "pore pressure at water", "seepage on soil", "seepage on water"}
     for scene in (scene_from_file("hydrostatic_tank_2d.toml"), scene_at(0.01, end_time=0.01)):
         plan = build_plan(scene)
         assert not names & {t.name for t in plan.terms}
@@ -211,7 +267,8 @@ def test_seepage_terms_only_with_water_and_soil():
     box = lambda form: parse_scene(__import__("tomllib").loads(BOX.replace("{form}", form)), "box.toml")
     mix, seed = build_plan(box("mixture")), build_plan(box("seed"))
     assert names <= {t.name for t in mix.terms}
-    assert "pore pressure at soil" not in {t.name for t in seed.terms}  # no buoyancy in the seed's form
+    buoyancy = {"pore pressure at soil", "pore pressure at water"}
+    assert not buoyancy & {t.name for t in seed.terms}  # no buoyancy in the seed's form
     assert {"seepage on soil", "seepage on water"} <= {t.name for t in seed.terms}
     for plan in (mix, seed):
         assert (Phase.SOIL, Phase.WATER) in plan.pairs and (Phase.WATER, Phase.SOIL) in plan.pairs
@@ -227,7 +284,8 @@ def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():
         "seepage on soil: soil <- water",
         "seepage on water: water <- soil",
         "C = n^2 gamma_w / k",
-        "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+        "pore pressure at water: water <- soil",
+        "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
         "Biot storage",
         "seepage drag [dt <= cfl.drag / (lambda_soil + lambda_water)]",
         "pore_pressure",

@@ -17,7 +17,7 @@ from .hydrostatic_image_pressure import HydrostaticImagePressure
 from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import Outlets
-from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
+from .seepage import PorePressureAtSoil, PorePressureAtWater, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .tait_eos import TaitEquationOfState
@@ -33,6 +33,7 @@ TERMS = (
     HydrostaticImagePressure,
     HydrostaticReference,
     PorePressureAtSoil,
+    PorePressureAtWater,
     SoilStressState,
     ArtificialStress,
     EquilibriumSoilImages,

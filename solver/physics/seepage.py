@@ -9,7 +9,7 @@ conserved pair by pair (docs/seepage.md derives each term):
 
   drag       F_ab = V_a V_b C W_ab (v_a - v_b)                    C = n gamma_w / k    ("seed")
                                                                  C = n^2 gamma_w / k  ("mixture")
-  buoyancy   F_ab = -(1 - n) V_a V_b (p_a - p~_b) grad_b W_ab      ("mixture" only)
+  buoyancy   F_ab = -(1 - n) V_a V_b (p^_a - p~_b) grad_b W_ab     ("mixture" only)
 
 with F_ab the force on soil b, the water getting -F_ab. "seed" is exactly the seed's eqs. (18),
 (20), (21) with the erratum of DESIGN.md (the sums run over the other phase with one pair value of
@@ -18,11 +18,14 @@ mixture form is Biot's (1941) two-phase mixture as used in SPH by Bui & Nguyen (
 Solids Struct. 125:244): per unit mixture volume the skeleton feels div sigma' - (1 - n) grad p + R
 and the water -n grad p - R, R = n^2 gamma_w (v_w - v_s) / k (Biot/Prevost drag, Morikawa & Asai
 2022 eqs. 7, 9). The water's own pass gives -grad p; the pair buoyancy, a difference-form gradient
-of p with p~_b the pore pressure interpolated at the soil particle (Shepard), gives -(1 - n) grad p
-to the skeleton and +(1 - n) grad p to the water. In the mixture form the water's continuity also
-feels the pores squeezed by the skeleton (Biot's storage: D ln rho_w/Dt gets -(phi/n) div v_s,
-phi = 1 - n the solid fraction at the water particle), which is what drives consolidation, and
-pore water starts at n rho_w with that as its EOS reference (tait_eos.py: p from rho / rho_ref).
+of p with p~_b the pore pressure interpolated at the soil particle (Shepard) and p^_a that
+interpolated back at the water particle (so no water particle feels its own pressure through a
+support cut by a wall), gives -(1 - n) grad p to the skeleton and +(1 - n) grad p to the water.
+Wall particles of fixed water blocks take no part in the pairs (they are walls, not pore water).
+In the mixture form the water's continuity also feels the pores squeezed by the skeleton (Biot's
+storage: D ln rho_w/Dt gets -(phi/n) div v_s, phi = 1 - n the solid fraction at the water
+particle), which is what drives consolidation, and pore water starts at n rho_w with that as its
+EOS reference (tait_eos.py: p from rho / rho_ref).
 
 The drag is explicit and its stiffness limits the step: the relaxation rate of a pair's relative
 velocity is lambda = lambda_a + lambda_b, lambda_i = sum_j K_ij / m_i (~ n g / k (1 + n rho_w /
@@ -43,6 +46,7 @@ from ..particles import FieldSpec, Mirror
 from ..scene import Seepage, Soil
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
     0, np.float64, "pore pressure interpolated at soil particles (mixture buoyancy)", Mirror.SCALAR
@@ -58,6 +62,7 @@ class SeepageSettings:
     solid: np.ndarray  # 1 - n of each soil material (mixture buoyancy), 0 in the seed form
     grain_density: np.ndarray  # rho_grain = rho_dry / (1 - n), for the solid fraction at water
     cfl_drag: float
+    walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
 
     @classmethod
     def of(cls, scene, materials):
@@ -78,7 +83,8 @@ class SeepageSettings:
             drag[k] = (n if form == Seepage.SEED else n * n) * gamma_w / perm
             solid[k] = 0.0 if form == Seepage.SEED else 1.0 - n
             grain[k] = mat.density / (1.0 - n)
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag)
+        walls = any(b.fixed and scene.materials[b.material].model == "water" for b in scene.blocks)
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, walls)
 
     @property
     def mixture(self):
@@ -123,9 +129,11 @@ def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore,
 
 @kernel(parallel=True)
 def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, p=None,
-                    pore=None, is3d=None):  # fmt: skip
+                    pore=None, is3d=None, wall=None):  # fmt: skip
     """Soil rows b: add sum_a F_ab / m_b (pair_force) over water neighbours a; returns the largest
-    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy)."""
+    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy).
+    wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are walls,
+    not pore water, and take no part in the coupling."""
     worst = 0.0
     for t in prange(targets.shape[0]):
         b = targets[t]
@@ -135,6 +143,8 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
         p_b = pore[b] if pore is not None else 0.0
         for s in range(start[t], start[t + 1]):
             a = index[s]
+            if wall is not None and wall[a]:
+                continue
             d2 = u2 = 0.0
             if is3d is not None:
                 d2 = x[b, 2] - x[a, 2]
@@ -159,7 +169,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
 
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, drho=None, p=None, pore=None, is3d=None):  # fmt: skip
+                     acc, drho=None, p=None, pore=None, is3d=None, wall=None):  # fmt: skip
     """Water rows a: add -sum_b F_ab / m_a (pair_force) over soil neighbours b; returns the largest
     lambda_a = sum_b K_ab / m_a. With drho (mixture), also Biot's storage term
     drho_a += -rho_a (phi_a / n_a) div v_s(x_a), phi_a = sum_b (m_b / rho_grain) W_ab the solid
@@ -167,6 +177,8 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
     worst = 0.0
     for t in prange(targets.shape[0]):
         a = targets[t]
+        if wall is not None and wall[a]:
+            continue  # a wall particle (seepage_on_soil)
         vol_a = mass[a] / rho[a]
         p_a = p[a] if p is not None else 0.0
         f0 = f1 = f2 = lam = 0.0
@@ -239,6 +251,30 @@ def _storage(a, first, last, index, x, v, rho, mass, material, grain_density, h,
     return -rho[a] * phi / (1.0 - phi) * div
 
 
+@kernel(parallel=True)
+def pore_pressure_at_water(targets, start, index, x, rho, mass, p, h, norm, pore, is3d=None):
+    """p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over the soil neighbours b of water a (the soil's
+    Shepard pore pressure smoothed back onto the water), written into pore[a]; p_a itself for water
+    with no soil within reach (it is in no coupling pair then). The buoyancy pair uses p^_a, not
+    p_a: with p_a a water particle whose soil support is cut (next to a wall of water particles)
+    feels its own pressure, -(1 - n) p_a sum_b V_b grad_a W_ab, which pushes a compressed particle
+    into the wall (docs/seepage.md, "Pore water along a wall")."""
+    for t in prange(targets.shape[0]):
+        a = targets[t]
+        num = den = 0.0
+        for s in range(start[t], start[t + 1]):
+            b = index[s]
+            d0 = x[a, 0] - x[b, 0]
+            d1 = x[a, 1] - x[b, 1]
+            d2 = 0.0
+            if is3d is not None:
+                d2 = x[a, 2] - x[b, 2]
+            w = mass[b] / rho[b] * cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
+            num += w * pore[b]
+            den += w
+        pore[a] = num / den if den > 0.0 else p[a]
+
+
 class PorePressureAtSoil(Term):
     """p~ at every owned soil particle from its water neighbours (mixture buoyancy)."""
 
@@ -267,6 +303,37 @@ class PorePressureAtSoil(Term):
         )  # fmt: skip
 
 
+class PorePressureAtWater(Term):
+    """p^ at every owned water particle from the p~ of its soil neighbours (mixture buoyancy): the
+    pair's water-side pressure, so no water particle feels its own pressure through a cut support."""
+
+    name = "pore pressure at water"
+    stage = Stage.STATE
+    targets = Phase.WATER
+    neighbours = Phase.SOIL
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls() if settings is not None and settings.mixture else None
+
+    def __init__(self):
+        super().__init__()
+        self.fields = {"pore_pressure": PORE_PRESSURE}
+        self.reads = ("x", "rho", "mass", "p", "pore_pressure")
+        self.writes = ("pore_pressure",)
+        self.equations = (
+            Equation("p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over soil b", "Shepard interpolation"),
+        )
+
+    def run(self, ctx):
+        ps, nl = ctx.particles, ctx.neighbours(self)
+        pore_pressure_at_water(
+            nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["p"], ctx.h, ctx.norm,
+            ps["pore_pressure"], ctx.is3d,
+        )  # fmt: skip
+
+
 class _Coupling(Term):
     """What the two sides of the coupling share."""
 
@@ -275,9 +342,10 @@ class _Coupling(Term):
     def __init__(self, settings: SeepageSettings):
         super().__init__()
         self.settings = settings
-        self.reads = ("x", "v", "rho", "mass", "material") + (
-            ("p", "pore_pressure") if settings.mixture else ()
-        )
+        self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
+        if settings.walls:  # wall particles of fixed water blocks are walls, not pore water
+            self.fields = {"fixed": FIXED}
+            self.reads += ("fixed",)
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
         equations = [
@@ -288,7 +356,7 @@ class _Coupling(Term):
         if settings.mixture:
             equations.append(
                 Equation(
-                    "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+                    "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
                     "Bui & Nguyen (2017)",
                 )
             )
@@ -312,8 +380,8 @@ class SeepageOnSoil(_Coupling):
         mix = st.mixture
         ctx.shared["seepage soil rate"] = seepage_on_soil(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
-            st.solid, ctx.h, ctx.norm, ps["acc"], ps["p"] if mix else None,
-            ps["pore_pressure"] if mix else None, ctx.is3d,
+            st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if mix else None,
+            ps["pore_pressure"] if mix else None, ctx.is3d, ps["fixed"] if st.walls else None,
         )  # fmt: skip
 
 
@@ -353,5 +421,6 @@ class SeepageOnWater(_Coupling):
         self.lam = seepage_on_water(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
-            ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["pore_pressure"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["fixed"] if st.walls else None,
         )  # fmt: skip
