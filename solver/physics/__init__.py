@@ -17,7 +17,7 @@ from .hydrostatic_image_pressure import HydrostaticImagePressure
 from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import Outlets
-from .seepage import PorePressureAtSoil, PorePressureAtWater, SeepageOnSoil, SeepageOnWater
+from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .tait_eos import TaitEquationOfState
@@ -33,7 +33,6 @@ TERMS = (
     HydrostaticImagePressure,
     HydrostaticReference,
     PorePressureAtSoil,
-    PorePressureAtWater,
     SoilStressState,
     ArtificialStress,
     EquilibriumSoilImages,
@@ -43,8 +42,8 @@ TERMS = (
     DensityDiffusionRate,
     SoilRates,
     ArtificialStressForce,
+    SeepageOnWater,  # before the soil side, which reads the p^ it writes
     SeepageOnSoil,
-    SeepageOnWater,
     FixedParticles,
     SoilReturnMapping,
     MidpointStart,
