@@ -3,7 +3,7 @@ of docs/seepage.md: all-pairs loops over the other phase, no neighbour lists.
 
   p~_b         = sum_a V_a p_a W_ab / sum_a V_a W_ab                     (Shepard, 0 if no water)
   p^_a         = sum_b V_b p~_b W_ab / sum_b V_b W_ab                    (Shepard, p_a if no soil)
-  F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p_a - p~_b) grad_b W_ab
+  F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p^_a - p~_b) grad_b W_ab
                  (C = drag of b's material, phi = 1 - n in the mixture form, 0 in the seed's)
   soil b       acc += sum_a F_ab / m_b
   water a      acc -= sum_b F_ab / m_a
@@ -41,7 +41,7 @@ def pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius):
 
 
 def pair_force(a, b, x, v, rho, mass, p, pore, drag, solid, h, dim):
-    """The force on soil b from water a."""
+    """The force on soil b from water a; p holds p^ on the water rows, pore p~ on the soil rows."""
     va, vb = mass[a] / rho[a], mass[b] / rho[b]
     w = cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim)
     f = va * vb * drag * w * (v[a] - v[b])
