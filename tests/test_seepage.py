@@ -162,7 +162,9 @@ def test_one_soil_material_switch_gives_the_general_result(rng, dim):
     equals the per-neighbour material lookup (to round-off: fastmath may hoist a reciprocal)."""
     s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
     s["material"][s["soil"]] = 1
-    (acc0, drho0, _, lam0, pore0), (acc1, drho1, _, lam1, pore1) = (_rates(s, one_soil=one) for one in (None, 1))
+    (acc0, drho0, _, lam0, pore0), (acc1, drho1, _, lam1, pore1) = (
+        _rates(s, one_soil=one) for one in (None, 1)
+    )
     np.testing.assert_allclose(acc1, acc0, rtol=1e-14, atol=1e-15 * np.abs(acc0).max())
     np.testing.assert_allclose(drho1, drho0, rtol=1e-14, atol=1e-15 * np.abs(drho0).max())
     np.testing.assert_allclose(pore1, pore0, rtol=1e-14)
