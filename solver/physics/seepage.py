@@ -189,25 +189,33 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
             f2 += kw * u2
             lam += kw
             den += vw
+            if drho is not None or (pore is not None and one_soil is not None):
+                b0 += vf * d0  # B, shared by the storage and (one soil material) the buoyancy
+                b1 += vf * d1
+                b2 += vf * d2
             if pore is not None:
                 num += vw * pore[b]
-                sf = solid[mb] * vf
+                sf = vf if one_soil is not None else solid[mb] * vf  # (1 - n) applied after the loop
                 sfp = sf * (pore[b] - p0)
-                q0 += sf * d0
-                q1 += sf * d1
-                q2 += sf * d2
                 g0 += sfp * d0
                 g1 += sfp * d1
                 g2 += sfp * d2
+                if one_soil is None:
+                    q0 += sf * d0
+                    q1 += sf * d1
+                    q2 += sf * d2
             if drho is not None:
                 phi += mass[b] / grain_density[mb] * w
                 s0 += vw * u0
                 s1 += vw * u1
                 s2 += vw * u2
-                b0 += vf * d0
-                b1 += vf * d1
-                b2 += vf * d2
                 div += vf * (u0 * d0 + u1 * d1 + u2 * d2)
+        if pore is not None and one_soil is not None:
+            sol = solid[one_soil]
+            q0, q1, q2 = sol * b0, sol * b1, sol * b2
+            g0 *= sol
+            g1 *= sol
+            g2 *= sol
         if pore is not None:
             p_hat = num / den if den > 0.0 else p[a]
             pore[a] = p_hat
