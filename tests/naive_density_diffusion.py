@@ -29,20 +29,24 @@ def renormalised_gradient(targets, x, rho, mass, h, dim, nbr_lists):
 def density_diffusion(
     targets, x, rho, mass, c0, delta, h, dim, nbr_lists, rho_ref=None, grad_rho=None, fraction=None
 ):
-    """With `fraction` (pore water): the diffused quantity is rho / n, the rate n_i times its diffusion."""
+    """With `fraction`: pore water (fraction < 1) neither gets nor gives any diffusion."""
     out = np.zeros(len(x))
     ref = np.zeros(len(x)) if rho_ref is None else rho_ref
-    n = np.ones(len(x)) if fraction is None else fraction
-    q = rho / n
+    free = np.ones(len(x), bool) if fraction is None else fraction >= 1.0
+    q = rho
     for t, i in enumerate(targets):
         total = 0.0
+        if not free[i]:
+            continue
         for j in nbr_lists[t]:
+            if not free[j]:
+                continue
             xji = x[j] - x[i]
             psi = 2.0 * ((q[j] - q[i]) - (ref[j] - ref[i])) * xji / np.dot(xji, xji)
             if grad_rho is not None:
                 psi = psi - (grad_rho[i] + grad_rho[j])
             total += np.dot(psi, grad_w(x[i], x[j], h, dim)) * mass[j] / rho[j]
-        out[i] = delta * h * c0 * total * n[i]
+        out[i] = delta * h * c0 * total
     return out
 
 

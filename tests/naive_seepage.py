@@ -2,7 +2,8 @@
 of docs/seepage.md: all-pairs loops over the other phase, no neighbour lists.
 
   p~_b         = sum_a V_a p_a W_ab / sum_a V_a W_ab                     (Shepard, 0 if no water)
-  F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p_a - p~_b) grad_b W_ab
+  p^_a         = sum_b V_b p~_b W_ab / sum_b V_b W_ab                    (Shepard, p_a if no soil)
+  F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p^_a - p~_b) grad_b W_ab
                  (C = drag of b's material, phi = 1 - n in the mixture form, 0 in the seed's)
   soil b       acc += sum_a F_ab / m_b
   water a      acc -= sum_b F_ab / m_a
@@ -28,8 +29,19 @@ def pore_pressure_at_soil(soil, water, x, rho, mass, p, h, dim, radius):
     return out
 
 
+def pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius):
+    """pore with p^_a written on the water rows (soil rows kept)."""
+    out = pore.copy()
+    for a in water:
+        w = np.array([mass[b] / rho[b] * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim) for b in soil])
+        inside = np.array([_within(x[a], x[b], radius) for b in soil])
+        w = np.where(inside, w, 0.0)
+        out[a] = (w @ pore[soil]) / w.sum() if w.sum() > 0 else p[a]
+    return out
+
+
 def pair_force(a, b, x, v, rho, mass, p, pore, drag, solid, h, dim):
-    """The force on soil b from water a."""
+    """The force on soil b from water a; p holds p^ on the water rows, pore p~ on the soil rows."""
     va, vb = mass[a] / rho[a], mass[b] / rho[b]
     w = cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim)
     f = va * vb * drag * w * (v[a] - v[b])

@@ -77,29 +77,33 @@ def test_midpoint_quadrature_has_no_secular_drift_for_an_oscillating_pair():
     assert abs(rho[0] - RHO0) < 1e-3 * swing
 
 
-def test_density_diffusion_of_pore_water_matches_twin_and_is_zero_at_equal_pressure(rng):
-    """Pore water (apparent density n rho_w) next to free water: the diffused quantity is rho/n."""
+def test_density_diffusion_leaves_pore_water_out(rng):
+    """Pore water (fraction < 1) neither gets nor gives density diffusion (docs/seepage.md, "Density
+    diffusion and pore water"); free water among free water diffuses as before."""
     x, rho, mass, h = disordered(rng, 2)
     targets, nl, lists = neighbours(x, 2, h)
     fraction = np.where(x[:, 1] < x[:, 1].mean(), 0.4, 1.0)
     rho_app = rho * fraction
 
-    def kernel(r):
+    def kernel(r, frac):
         out = np.zeros(len(x))
         dd.density_diffusion(
             targets, nl.start, nl.index, x, r, mass * fraction, np.zeros(len(x), np.int32), np.array([C0]),
-            DELTA, h, cubic_spline_normalisation(2, h), out, None, None, None, fraction,
+            DELTA, h, cubic_spline_normalisation(2, h), out, None, None, None, frac,
         )  # fmt: skip
         return out
 
-    got = kernel(rho_app)
+    got = kernel(rho_app, fraction)
     want = naive.density_diffusion(
         targets, x, rho_app, mass * fraction, C0, DELTA, h, 2, lists, fraction=fraction
     )
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
-    # equal intrinsic density (equal pressure) on both sides of the jump of n: no flux at all
-    uniform = kernel(np.full(len(x), RHO0) * fraction)
-    assert np.abs(uniform).max() < 1e-9 * np.abs(got).max()
+    assert not got[fraction < 1.0].any()
+    # free water: as without fractions, minus the pairs with pore water
+    assert np.abs(got[fraction == 1.0]).max() > 0.0
+    # no mass created: sum_i V_i D_i = 0 over the free water (antisymmetric pairs)
+    vol = mass * fraction / rho_app
+    assert abs((vol * got).sum()) < 1e-9 * (vol * np.abs(got)).sum()
 
 
 def test_hydrostatic_image_increment_of_pore_water_uses_the_intrinsic_density():

