@@ -22,6 +22,11 @@ velocity reversed, tangential kept). Without it a jet aimed at a corner (a squar
 degrees) drove particles into the body (tests/test_bodies.py). At a concave vertex between a body
 and a box wall the corner image (the image of an image) is missing.
 
+Repulsion backstop. As at the box walls (wall_repulsion.py), the image force vanishes as a particle
+reaches the wall (dW/dr = 0 at r = 0), so a jet drove particles through the edges (the strict xfails
+of tests/test_bodies.py): each edge and convex vertex also carries Monaghan's (1994) Lennard-Jones
+backstop within dx/2 (body_repulsion.py), zero beyond it, so no particle of an undisturbed lattice feels it.
+
 Leak guard. After each drift, every owned particle found inside a body is counted (the leak
 counter reported in run.json) and put back by reflecting it across the nearest edge, with its
 velocity's normal part reversed, as the box walls' specular reflection does (README, "Walls cannot
