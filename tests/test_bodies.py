@@ -202,7 +202,8 @@ RAMP = [[0.05, 0.0], [0.35, 0.0], [0.05, 0.17]]
 
 # Both jets leaked before the bodies had the wall backstop (body_repulsion.py) and the pruning of pairs
 # that see an image from behind its mirror line: 106 particle-steps inside the ramp, and a blow-up with
-# a particle 11.5 mm inside past the convex corner (measured 2026-12-01). Nightly: 1-5 min of CPU each.
+# a particle 11.5 mm inside past the convex corner (measured 2026-12-01). With the pruning alone both still
+# leak (the guard counts them); the backstop holds both. Nightly: 1-5 min of CPU each.
 @pytest.mark.nightly
 def test_jet_at_q011_onto_an_inclined_body_does_not_leak():
     """A q = 0.11 m^2/s jet (1.83 m/s) shot 45 degrees down onto the middle of an inclined face (no
