@@ -431,6 +431,7 @@ def _plot_resolution(plt, cases, path):
         (line,) = ax.plot(c["t"], 1000 * c["d"], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
         if coarse is not None:
             ax.plot(coarse["t"], 1000 * coarse["d"], "--", color=line.get_color(), label="same, 5 mm")
+    ax.set_xlim(0.0, 1.25 * max(c["t_reached"] for c in fine))  # where both resolutions have data
     ax.set_xlabel("t (s)")
     ax.set_ylabel("scour depth d (mm)")
     ax.set_title("resolution: 5 mm against 2.5 mm")
