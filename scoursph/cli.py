@@ -1,4 +1,5 @@
-"""The command line: `scoursph run SCENE`, `scoursph verify CASE`, `scoursph report`.
+"""The command line: `scoursph run SCENE`, `scoursph verify CASE`, `scoursph report`,
+`scoursph study scour ...` (the scouring study, verification/scour_study.py).
 
 Exit status: 0 success, 1 numerical blow-up (outputs so far are kept) or a failed
 verification check, 2 bad input (scene file, option, output directory or restart; nothing
@@ -93,6 +94,13 @@ def _parser():
     from verification.nightly.options import add_arguments as add_report_arguments
 
     add_report_arguments(sub.add_parser("report", help="nightly verification report: HTML page + JSON"))
+    st = sub.add_parser(
+        "study",
+        help="a parameter study: 'scour' runs verification/scour_study.py (issue 11), e.g. "
+        "'scoursph study scour report' or 'scoursph study scour run saturated 0.11 --end 0.5'",
+    )
+    st.add_argument("study", choices=("scour",))
+    st.add_argument("study_args", nargs=argparse.REMAINDER, help="its arguments (default: report)")
     return p
 
 
@@ -118,6 +126,10 @@ def main(argv=None):
         from verification.nightly.report import main as report
 
         return report(args)
+    if args.command == "study":
+        from verification.scour_study import main as scour_study
+
+        return scour_study(args.study_args or ["report"])
     return _verify(args)
 
 

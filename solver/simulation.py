@@ -144,6 +144,8 @@ class Simulation:
             (target, other): self.cells.neighbour_list(ps["x"], ctx.rows[target], self.radius, phase, other)
             for target, other in plan.pairs
         }
+        if ctx.images is not None:  # no pair sees a body image from behind its mirror line
+            ctx.lists = ctx.images.prune(ps, ctx.lists)
         ps["x_ref"][: ps.n_owned] = ps["x"][: ps.n_owned]
         self.rebuilds += 1
 

@@ -50,3 +50,39 @@ def inside_polygon(x, vertices):
 def in_boxes(x, lo, hi):
     inside = np.all((x[:, None, :] >= lo[None]) & (x[:, None, :] <= hi[None]), axis=2)
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+
+
+def prune_behind_mirrors(targets, start, index, x, first, src):
+    """Twin of bodies.prune_behind_mirrors: the neighbour rows kept per target, as lists."""
+    kept = []
+    for t, i in enumerate(targets):
+        row = []
+        for j in index[start[t] : start[t + 1]]:
+            k = j - first
+            if 0 <= k < len(src):
+                s = x[src[k]]
+                if np.dot(x[i] - 0.5 * (s + x[j]), s - x[j]) <= 0.0:
+                    continue
+            row.append(int(j))
+        kept.append(row)
+    return kept
+
+
+def body_repulsion(x, r0, d_coef, edges, convex_vertices):
+    """Twin of body_repulsion.body_repulsion: edges as (a, b, outward normal), convex vertices as
+    (v, arriving edge direction, leaving edge direction)."""
+    acc = np.zeros_like(x)
+    for i, p in enumerate(x):
+        for a, b, n in edges:
+            t = (b - a) / np.linalg.norm(b - a)
+            dist = np.dot(p - a, n)
+            foot = np.dot(p - a, t)
+            if abs(dist) < r0 and 0.0 <= foot <= np.linalg.norm(b - a):
+                d = max(dist, 1e-6 * r0)
+                acc[i] += d_coef * ((r0 / d) ** 12 - (r0 / d) ** 4) / d * n
+        for v, t_in, t_out in convex_vertices:
+            r = p - v
+            if np.dot(r, t_in) > 0.0 and np.dot(r, t_out) < 0.0 and 0.0 < np.linalg.norm(r) < r0:
+                d = np.linalg.norm(r)
+                acc[i] += d_coef * ((r0 / d) ** 12 - (r0 / d) ** 4) / d * r / d
+    return acc

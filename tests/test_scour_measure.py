@@ -10,6 +10,7 @@ dx^2 W(0) = 0.27, is below 1/2); one resting on it lifts the surface by less tha
 """
 
 import numpy as np
+import pytest
 
 from solver.output.scour import ScourGrid, measure, surface_profile
 
@@ -63,3 +64,14 @@ def test_a_grain_thrown_up_does_not_move_the_surface_and_one_resting_on_it_barel
     assert abs(lift(2.6 * DX)) < 1e-12  # in flight, out of the top row's kernel support (round-off)
     assert 0.0 < lift(DX) < DX / 3
     assert 0.0 < lift(DX / 2) < DX / 2  # a fraction of a cell: one grain is not a new row
+
+
+def test_scoursph_study_scour_is_the_study_script(capsys):
+    """`scoursph study scour ...` forwards its arguments to verification/scour_study.py (issue 11
+    item 6: the study as a CLI subcommand)."""
+    from scoursph.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["study", "scour", "--help"])
+    assert exc.value.code == 0
+    assert "python -m verification.scour_study" in capsys.readouterr().out

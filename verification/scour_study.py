@@ -21,6 +21,7 @@ scour_study.csv, and the figures
   depth_vs_q.png           d at fixed times against q, dry and saturated, with the q-exponent fits
                            and the range of the published formulas' exponents in this set-up
   snapshots_q0.11.png      particles at the seed's figure times (its Figs. 3-6 and 8-11)
+  snapshots_q0.11_late.png the same at 0.25, 0.5 and 1 s (the times reached)
   resolution.png           d(t) at 5 and 2.5 mm for the runs made at both.
 
 The scour depth is solver/output/scour.py's: d(t) = max over x of (z_s(x, 0) - z_s(x, t)), with
@@ -341,6 +342,7 @@ def report(out=RESULTS):
     _plot_depth_vs_q(plt, cases, fixed, fx, out / "depth_vs_q.png")
     _plot_resolution(plt, cases, out / "resolution.png")
     _plot_snapshots(plt, out / "snapshots_q0.11.png")
+    _plot_snapshots(plt, out / "snapshots_q0.11_late.png", times=(0.25, 0.5, 1.0), note="later times")
     print(f"report in {out}/scour_study.md")
     return 0
 
@@ -356,11 +358,14 @@ def _plot_depth_vs_time(plt, cases, path):
         for c in sel:
             colour = cmap((c["q"] - 0.06) / 0.05 * 0.9)
             ax.plot(c["t"], 1000 * c["d"], "-", color=colour, label=f"q = {c['q']:.2f} m²/s")
-        ax.axhline(95, color="0.5", lw=0.8, ls=":")
+        # the rigid base when the holes come near it, else one particle spacing (a row removed)
+        deepest = max([1000 * c["d"].max() for c in cases if len(c["d"])] + [0.0])
+        ax.axhline(95 if deepest > 30 else 1000 * DX, color="0.5", lw=0.8, ls=":")
         ax.set_title(f"{soil} soil, dx = 5 mm (the seed's Fig. {fig_no})")
         ax.set_xlabel("t (s)")
         ax.legend(fontsize=8)
-    axes[0].set_ylabel("scour depth d (mm); dotted: the rigid base")
+    what = "the rigid base" if deepest > 30 else "one particle spacing"
+    axes[0].set_ylabel(f"scour depth d (mm); dotted: {what}")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -426,6 +431,7 @@ def _plot_resolution(plt, cases, path):
         (line,) = ax.plot(c["t"], 1000 * c["d"], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
         if coarse is not None:
             ax.plot(coarse["t"], 1000 * coarse["d"], "--", color=line.get_color(), label="same, 5 mm")
+    ax.set_xlim(0.0, 1.25 * max(c["t_reached"] for c in fine))  # where both resolutions have data
     ax.set_xlabel("t (s)")
     ax.set_ylabel("scour depth d (mm)")
     ax.set_title("resolution: 5 mm against 2.5 mm")
@@ -435,12 +441,11 @@ def _plot_resolution(plt, cases, path):
     plt.close(fig)
 
 
-def _plot_snapshots(plt, path, q=0.11):
-    """Particles at the seed's figure times (its Figs. 3-6, saturated, and 8-11, dry), when the
-    HDF5 series of the 5 mm runs at q are on disk."""
+def _plot_snapshots(plt, path, q=0.11, times=(0.005, 0.01, 0.02, 0.025), note="the seed's Figs. 3-6, 8-11"):
+    """Particles at the seed's figure times (its Figs. 3-6, saturated, and 8-11, dry), or at `times`,
+    when the HDF5 series of the 5 mm runs at q are on disk."""
     from solver.output.hdf5_writer import read_series
 
-    times = (0.005, 0.01, 0.02, 0.025)
     series = {}
     for soil in SOILS:
         h5 = RUNS / case_name(soil, q, DX) / "particles.h5"
@@ -467,7 +472,7 @@ def _plot_snapshots(plt, path, q=0.11):
             ax.set_title(f"{soil}, t = {t:g} s", fontsize=9)
             ax.tick_params(labelsize=6)
     fig.suptitle(
-        f"q = {q} m²/s, dx = 5 mm: blue water, brown soil (over its pore water; the seed's Figs. 3-6, 8-11)",
+        f"q = {q} m²/s, dx = 5 mm: blue water, brown soil (over its pore water; {note})",
         fontsize=10,
     )
     fig.tight_layout()

@@ -7,6 +7,7 @@ within a stage; a term that needs another's output comes after it.
 
 from .artificial_stress import ArtificialStress, ArtificialStressForce
 from .bodies import BodyGuard
+from .body_repulsion import BodyRepulsion
 from .density_diffusion import DensityDiffusionRate, HydrostaticReference
 from .equilibrium_soil_images import EquilibriumSoilImages
 from .fixed_particles import FixedParticles
@@ -29,6 +30,7 @@ TERMS = (
     WallImages,
     Gravity,
     WallRepulsion,
+    BodyRepulsion,
     TaitEquationOfState,
     HydrostaticImagePressure,
     HydrostaticReference,

@@ -22,6 +22,11 @@ velocity reversed, tangential kept). Without it a jet aimed at a corner (a squar
 degrees) drove particles into the body (tests/test_bodies.py). At a concave vertex between a body
 and a box wall the corner image (the image of an image) is missing.
 
+Repulsion backstop. As at the box walls (wall_repulsion.py), the image force vanishes as a particle
+reaches the wall (dW/dr = 0 at r = 0), so a jet drove particles through the edges (the strict xfails
+of tests/test_bodies.py): each edge and convex vertex also carries Monaghan's (1994) Lennard-Jones
+backstop within dx/2 (body_repulsion.py), zero beyond it, so no particle of an undisturbed lattice feels it.
+
 Leak guard. After each drift, every owned particle found inside a body is counted (the leak
 counter reported in run.json) and put back by reflecting it across the nearest edge, with its
 velocity's normal part reversed, as the box walls' specular reflection does (README, "Walls cannot
@@ -232,6 +237,35 @@ def guard_bodies(n, x, v, v_half, verts, starts, ea, et, en, elen, ebody, fix):
     return count, deepest
 
 
+@kernel
+def prune_behind_mirrors(targets, start, index, x, first, src, new_start, new_index):
+    """Drop from a neighbour list every pair (target i, body image k) whose target lies behind the
+    image's mirror line, (x_i - m) . (x_s - x_k) <= 0 with x_s the image's source and m the midpoint
+    (the mirror line is the perpendicular bisector of x_s and x_k). Returns the pairs kept; with
+    new_index of length 0 it only counts them (new_start filled either way)."""
+    n_img = src.shape[0]
+    fill = new_index.shape[0] > 0
+    m = 0
+    new_start[0] = 0
+    for t in range(targets.shape[0]):
+        i = targets[t]
+        for s in range(start[t], start[t + 1]):
+            j = index[s]
+            k = j - first
+            if 0 <= k < n_img:
+                a = src[k]
+                side = 0.0
+                for d in range(x.shape[1]):
+                    side += (x[i, d] - 0.5 * (x[a, d] + x[j, d])) * (x[a, d] - x[j, d])
+                if side <= 0.0:
+                    continue
+            if fill:
+                new_index[m] = j
+            m += 1
+        new_start[t + 1] = m
+    return m
+
+
 class BodyImages:
     """The current table of body images (rows after the box walls' images)."""
 
@@ -297,6 +331,28 @@ class BodyImages:
             self.src[n : n + k], self.rot[n : n + k], self.off[n : n + k] = s_, r_, o_
             n += k
         return n
+
+    def prune(self, particles, lists, first):
+        """Neighbour lists without the pairs that see a body image from behind its mirror line
+        (prune_behind_mirrors). An image mirrored across an edge's line, or through a convex
+        vertex, is closer than its source to a particle on the far side of that line, e.g. the
+        particles along a caisson's face below its crown see the images of the overflow above the
+        crown (the mirrors across the crown's line) inside the body; they compressed the pore water
+        under the crown at every rebuild and lifted the soil there (docs/scour_study.md)."""
+        if self.n == 0:
+            return lists
+        x, src = particles["x"], self.src[: self.n]
+        out = {}
+        for key, nl in lists.items():
+            new_start = np.zeros(len(nl.targets) + 1, dtype=np.int64)
+            m = prune_behind_mirrors(nl.targets, nl.start, nl.index, x, first, src, new_start, nl.index[:0])
+            if m == len(nl.index):
+                out[key] = nl
+                continue
+            new_index = np.empty(m, dtype=nl.index.dtype)
+            prune_behind_mirrors(nl.targets, nl.start, nl.index, x, first, src, new_start, new_index)
+            out[key] = type(nl)(nl.targets, new_start, new_index)
+        return out
 
     def refresh(self, particles, names, specs, first):
         if self.n == 0:

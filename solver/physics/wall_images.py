@@ -186,6 +186,12 @@ class ImageWalls:
         nb = self.bodies.rebuild(particles, n_local + n, box) if self.bodies is not None else 0
         particles.n_image = n + nb
 
+    def prune(self, particles, lists):
+        """The neighbour lists without pairs that see a body image from behind its mirror line."""
+        if self.bodies is None:
+            return lists
+        return self.bodies.prune(particles, lists, particles.n_local + self.n)
+
     def tables(self):
         """The box walls' images (the body images after them have rotation tables of their own)."""
         return self.src[: self.n], self.sign[: self.n], self.offset[: self.n]
@@ -281,6 +287,9 @@ class WallImages(Term):
 
     def tables(self):
         return self.walls.tables()
+
+    def prune(self, particles, lists):
+        return self.walls.prune(particles, lists)
 
     def refresh(self, particles, names, specs):
         self.walls.refresh(particles, names, specs)
