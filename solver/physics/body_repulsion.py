@@ -20,9 +20,9 @@ import numpy as np
 from numba import prange
 
 from ..config import kernel
-from ..term import Equation, Stage, Term
+from ..term import Stage, Term
 from .bodies import BodyGeometry
-from .wall_repulsion import D_OVER_GH, largest_height
+from .wall_repulsion import backstop
 
 
 @kernel(parallel=True)
@@ -83,17 +83,10 @@ class BodyRepulsion(Term):
     def __init__(self, scene):
         super().__init__()
         self.geo = BodyGeometry(scene)
-        self.r0 = 0.5 * scene.scene.spacing
-        self.height = largest_height(scene)
-        self.d_coef = D_OVER_GH * float(np.linalg.norm(scene.scene.gravity)) * self.height
+        where = "along a body edge's normal (or from a convex vertex)"
+        self.r0, self.height, self.d_coef, equation = backstop(scene, where)
         self.adds_to = ("acc",)
-        self.equations = (
-            Equation(
-                f"a = D [(r0/d)^12 - (r0/d)^4] / d along a body edge's normal (or from a convex vertex) "
-                f"for d < r0 = dx/2, D = 5 g H = {self.d_coef:.4g} m^2/s^2 (H = {self.height:.4g} m)",
-                "Monaghan (1994), Lennard-Jones boundary force, D = 5 g H",
-            ),
-        )
+        self.equations = (equation,)
 
     def run(self, ctx):
         ps, g = ctx.particles, self.geo

@@ -91,6 +91,20 @@ def largest_height(scene) -> float:
     return float(max(tops) - min(bottoms))
 
 
+def backstop(scene, where):
+    """(r0, H, D, equation) of Monaghan's backstop for a scene: r0 = dx/2, H = largest_height(scene),
+    D = 5 g H, shared by the box walls and the body walls (body_repulsion.py)."""
+    r0 = 0.5 * scene.scene.spacing
+    height = largest_height(scene)
+    d_coef = D_OVER_GH * float(np.linalg.norm(scene.scene.gravity)) * height
+    equation = Equation(
+        f"a = D [(r0/d)^12 - (r0/d)^4] / d {where} for d < r0 = dx/2, "
+        f"D = 5 g H = {d_coef:.4g} m^2/s^2 (H = {height:.4g} m)",
+        "Monaghan (1994), Lennard-Jones boundary force, D = 5 g H",
+    )
+    return r0, height, d_coef, equation
+
+
 def _corners(lo, hi):
     dim = len(lo)
     return np.array([[(hi if (k >> a) & 1 else lo)[a] for a in range(dim)] for k in range(2**dim)])
@@ -112,17 +126,9 @@ class WallRepulsion(Term):
     def __init__(self, scene):
         super().__init__()
         self.planes = wall_planes(scene)
-        self.r0 = 0.5 * scene.scene.spacing
-        self.height = largest_height(scene)
-        self.d_coef = D_OVER_GH * float(np.linalg.norm(scene.scene.gravity)) * self.height
+        self.r0, self.height, self.d_coef, equation = backstop(scene, "normal to a wall")
         self.adds_to = ("acc",)
-        self.equations = (
-            Equation(
-                f"a = D [(r0/d)^12 - (r0/d)^4] / d normal to a wall for d < r0 = dx/2, "
-                f"D = 5 g H = {self.d_coef:.4g} m^2/s^2 (H = {self.height:.4g} m)",
-                "Monaghan (1994), Lennard-Jones boundary force, D = 5 g H",
-            ),
-        )
+        self.equations = (equation,)
 
     def run(self, ctx):
         ps = ctx.particles
