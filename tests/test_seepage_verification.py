@@ -13,8 +13,10 @@ from verification import (
 )
 
 
-def _failed(res):
-    return [c.line() for c in res.checks if not c.passed]
+def _failed(res, known=None):
+    """The failed checks that are not the case's documented KNOWN_FAILURES (those the nightly
+    report lists as known)."""
+    return [c.line() for c in res.checks if not c.passed and c.metric not in (known or {})]
 
 
 @pytest.mark.slow
@@ -135,7 +137,8 @@ CASES = [
 @pytest.mark.parametrize("case", CASES, ids=["bed_at_rest", "darcy", "terzaghi", "critical_gradient"])
 def test_nightly_case_at_default_resolution(case, tmp_path):
     res = case.run(case.DEFAULT_RESOLUTION, out_dir=tmp_path)
-    assert not _failed(res), "\n".join(_failed(res))
+    known = getattr(case, "KNOWN_FAILURES", {})
+    assert not _failed(res, known), "\n".join(_failed(res, known))
 
 
 @pytest.mark.nightly
