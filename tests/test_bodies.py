@@ -37,17 +37,23 @@ class _Scene:
         self.bodies = [type("B", (), {"vertices": vertices, "name": "b"})()]
 
 
-def test_body_images_match_the_numpy_twin():
-    rng = np.random.default_rng(3)
-    geo = BodyGeometry(_Scene(DIAMOND[::-1]))  # clockwise input: normals still point outward
-    x = rng.uniform([0.03, 0.0], [0.17, 0.13], size=(400, 2))
-    reach = 0.015
+def _body_images(geo, x, reach):
+    """The kernel's two passes: count the images, then fill (source, rotation, offset)."""
     tables = (geo.a, geo.t, geo.n, geo.length, geo.corner, geo.t_in, geo.t_out)
     n = find_body_images(
         x, len(x), reach, *tables, np.zeros(0, np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2))
     )
     src, rot, off = np.zeros(n, np.int64), np.zeros((n, 2, 2)), np.zeros((n, 2))
     find_body_images(x, len(x), reach, *tables, src, rot, off)
+    return n, src, rot, off
+
+
+def test_body_images_match_the_numpy_twin():
+    rng = np.random.default_rng(3)
+    geo = BodyGeometry(_Scene(DIAMOND[::-1]))  # clockwise input: normals still point outward
+    x = rng.uniform([0.03, 0.0], [0.17, 0.13], size=(400, 2))
+    reach = 0.015
+    n, src, rot, off = _body_images(geo, x, reach)
     edges = [(geo.a[e], geo.a[e] + geo.length[e] * geo.t[e], geo.n[e]) for e in range(len(geo.a))]
     twin = naive_open.body_images(x, reach, edges, np.asarray(DIAMOND, float))
     assert n == len(twin) > 20
@@ -97,12 +103,7 @@ def test_pruning_matches_the_twin():
     x = rng.uniform([0.03, 0.0], [0.17, 0.13], size=(300, 2))
     x = x[~naive_open.inside_polygon(x, DIAMOND)]
     reach = 0.015
-    tables = (geo.a, geo.t, geo.n, geo.length, geo.corner, geo.t_in, geo.t_out)
-    n = find_body_images(
-        x, len(x), reach, *tables, np.zeros(0, np.int64), np.zeros((0, 2, 2)), np.zeros((0, 2))
-    )
-    src, rot, off = np.zeros(n, np.int64), np.zeros((n, 2, 2)), np.zeros((n, 2))
-    find_body_images(x, len(x), reach, *tables, src, rot, off)
+    n, src, rot, off = _body_images(geo, x, reach)
     rows = np.zeros((len(x) + n, 2))
     rows[: len(x)] = x
     refresh_rotated_vectors(len(x), src, rot, off, rows, True)
