@@ -103,7 +103,8 @@ STUDY_RESOLUTIONS = (20, 40)
 KNOWN_FAILURES: dict[str, str] = {}
 
 
-BEDS = ("body", "box_free_slip", "box_no_slip")
+BEDS = ("body", "box_free_slip", "box_no_slip", "body_long")
+LONG_OUTLET = 0.50  # m: bed = "body_long" moves the end wall and the outlet here
 
 
 def label(q, dx, bed="body"):
@@ -116,7 +117,8 @@ def scene(q, dx=DX, end_time=END_TIME, bed="body"):
     empty at t = 0. bed = "body" (the case): caisson, bed at the soil surface and end wall as one
     polygon body (free-slip images, as the scour scene's bodies). Diagnostics: "box_free_slip" /
     "box_no_slip", the bed as the box's floor (y_min = 0.095 m) with that wall condition and the
-    caisson as a body above it (isolates the body's concave corner, and the slip condition)."""
+    caisson as a body above it (isolates the body's concave corner, and the slip condition);
+    "body_long", the bed, end wall and outlet moved from 0.25 m to LONG_OUTLET (isolates the outlet)."""
     path = SCENES_DIR / "scour_dry.toml"
     raw = tomllib.loads(path.read_text())
     raw["scene"].update(
@@ -126,7 +128,13 @@ def scene(q, dx=DX, end_time=END_TIME, bed="body"):
     raw["blocks"] = []
     raw["materials"].pop("sand")
     x_end = raw["bodies"][1]["vertices"][1][0]  # the end wall's outer face (0.28 m)
-    if bed == "body":
+    if bed == "body_long":
+        shift = LONG_OUTLET - 0.25
+        x_end += shift
+        raw["domain"]["max"][0] += shift
+        raw["outlets"][0]["min"][0] += shift
+        raw["outlets"][0]["max"][0] += shift
+    if bed in ("body", "body_long"):
         outline = [[-0.05, 0.0], [x_end, 0.0], [x_end, Y_BED], [0.0, Y_BED], [0.0, Y_CROWN], [-0.05, Y_CROWN]]
     elif bed in BEDS:
         raw["domain"]["min"][1] = Y_BED
@@ -195,6 +203,7 @@ class Sampler:
         self.n = 0
         self.phi = np.zeros(shape)
         self.phi_u = np.zeros(shape + (2,))
+        self.phi_p = np.zeros(shape)
         self.p_bed = np.zeros(len(grid.x))
         self.p_bed_n = np.zeros(len(grid.x))
 
@@ -205,15 +214,18 @@ class Sampler:
         xa, va, (bed, face) = with_images(x, v, sim.h)
         vola = np.concatenate([vol, vol[bed], vol[face]])
         phi = self.grid.scatter(xa, vola[:, None])[..., 0]
-        s = self.grid.scatter(x, np.column_stack([vol, vol * v[:, 0], vol * v[:, 1]]))
+        p = ps.owned("p")
+        s = self.grid.scatter(x, np.column_stack([vol, vol * v[:, 0], vol * v[:, 1], vol * p]))
         with np.errstate(invalid="ignore", divide="ignore"):
             u = np.where(s[..., :1] > 0, s[..., 1:] / s[..., :1], 0.0)
-        return phi, u
+        self.last_p = u[..., 2]  # Shepard pressure (diagnostic map, not compared)
+        return phi, u[..., :2]
 
     def add(self, sim):
         phi, u = self.fields(sim)
         self.phi += phi
         self.phi_u += phi[..., None] * u
+        self.phi_p += phi * self.last_p
         ps = sim.particles
         x, p, vol = ps.owned("x"), ps.owned("p"), ps.owned("mass") / ps.owned("rho")
         near = x[:, 1] < Y_BED + 2 * sim.h
@@ -333,6 +345,15 @@ def simulate(q, dx=DX, end_time=END_TIME, window=WINDOW, out=OUT, log=print, bed
     if sampler.n:
         phi, u, p = sampler.means()
         avg = reduce_average(grid, phi, u, p)
+        maps = (
+            Path(__file__).resolve().parent.parent / "runs" / "overflow_nappe_maps"
+        )  # diagnostics, not committed
+        maps.mkdir(parents=True, exist_ok=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p_map = np.where(sampler.phi > 0, sampler.phi_p / sampler.phi, np.nan)
+        np.savez_compressed(maps / f"{lab}.npz", x=grid.x, y=grid.y, phi=phi, u=u, p=p_map)
+        ps = sim.particles
+        np.savez_compressed(maps / f"{lab}_final.npz", x=ps.owned("x"), v=ps.owned("v"), p=ps.owned("p"))
         sel = (hist[:, 0] >= window[0] - 1e-9) & (hist[:, 0] <= window[1] + 1e-9)
         h = hist[sel]
         res["average_window_s"] = list(window)
@@ -706,9 +727,36 @@ def report(out=OUT):
                     + " |"
                 )
             lines.append("")
+    lines += _diagnostics(out)
     path = Path(out) / "overflow_nappe.md"
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def _diagnostics(out):
+    """The bed variants side by side (q = 0.06, 5 mm): SPH - OF 2.5 mm per metric."""
+    have = [b for b in BEDS if (Path(out) / f"run_{label(0.06, DX, b)}_sph.json").exists()]
+    if len(have) < 2:
+        return []
+    cols = {b: {r["metric"]: r["sph_minus_of"] for r in compare(0.06, DX, out, b)} for b in have}
+    cost = {b: json.loads((Path(out) / f"run_{label(0.06, DX, b)}_sph.json").read_text()) for b in have}
+    lines = [
+        "## Diagnostics: the bed as a body, or as the box floor with free or no slip (q = 0.06, 5 mm)",
+        "",
+        "`python -m verification.overflow_nappe_rigid_bed run 0.06 --bed box_free_slip|box_no_slip`: the "
+        "bed is the box's floor (y_min = 0.095 m) and the caisson a body above it. SPH − OF 2.5 mm:",
+        "",
+        "| metric | " + " | ".join(have) + " |",
+        "|---|" + "---|" * len(have),
+    ]
+    for key in cols["body"]:
+        lines.append(f"| {key} | " + " | ".join(_fmt(cols[b].get(key)) for b in have) + " |")
+    lines.append(
+        "| CPU s / wall s / load | "
+        + " | ".join(f"{cost[b]['cpu_s']} / {cost[b]['wall_s']} / {cost[b]['load_1min']}" for b in have)
+        + " |"
+    )
+    return lines + [""]
 
 
 def _fmt(v):
