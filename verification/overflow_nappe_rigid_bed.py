@@ -493,7 +493,7 @@ def ballistic_head(q, times=EARLY_TIMES):
     return np.column_stack([t, uc * t, Y_CROWN - 0.5 * G * t * t])
 
 
-def tolerances(q, sph_fine=None, x_max=X_JUDGED):
+def tolerances(q, sph_fine=None, x_max=X_JUDGED, out=OUT):
     """Per metric: the OpenFOAM mesh-study spreads (5 vs 2.5, 3.33 vs 2.5) and, if given, the SPH
     5 vs 2.5 mm spread; their sum is the tolerance (module docstring)."""
     ref = load_of(q, "2p5")
@@ -505,7 +505,7 @@ def tolerances(q, sph_fine=None, x_max=X_JUDGED):
     parts["OF 5 vs 2.5 mm"].update(early_metrics(heads["5"], heads["2p5"]))
     parts["OF 3.33 vs 2.5 mm"].update(early_metrics(heads["3p33333"], heads["2p5"]))
     if sph_fine is not None:
-        coarse = load_sph(q, DX)
+        coarse = load_sph(q, DX, out) or load_sph(q, DX, OUT)
         if coarse is not None:
             parts["SPH 5 vs 2.5 mm"] = metrics(coarse, sph_fine, x_max)
             parts["SPH 5 vs 2.5 mm"].update(early_metrics(coarse["head"], sph_fine["head"]))
@@ -521,11 +521,13 @@ def compare(q, dx=DX, out=OUT, bed="body"):
     s = load_sph(q, dx, out, bed)
     if s is None:
         raise FileNotFoundError(f"no saved SPH run {label(q, dx, bed)} in {out}")
-    fine = load_sph(q, DX_FINE, out) if dx != DX_FINE else None
+    fine = None
+    if dx != DX_FINE:  # the SPH 2.5 mm run: from `out`, else the committed one
+        fine = load_sph(q, DX_FINE, out) or load_sph(q, DX_FINE, OUT)
     ref = load_of(q, "2p5")
     rows = []
     for x_max, judged_range in ((X_JUDGED, True), (None, False)):
-        tol, parts = tolerances(q, fine, x_max)
+        tol, parts = tolerances(q, fine, x_max, out)
         m = metrics(s, ref, x_max)
         if judged_range:
             m.update(early_metrics(s["head"], of_head(q)["2p5"]))
@@ -629,6 +631,11 @@ def figure(dx=DX, out=OUT):
         up, lo = ballistic_surfaces(bx, q)
         ax_n.plot(bx, up, "g--", lw=1, label="ballistic jet")
         ax_n.plot(bx, lo, "g--", lw=1)
+        long = load_sph(q, dx, out, "body_long")
+        if long is not None:  # the diagnostic with the outlet at 0.50 m
+            nm = f"SPH {dx * 1000:g} mm, outlet at {LONG_OUTLET} m"
+            ax_n.plot(long["nappe"][:, 0], long["nappe"][:, 1], "x", ms=3, color="C2", label=nm)
+            ax_p.plot(long["bed"][:, 0], long["bed"][:, 1], "x", ms=3, color="C2", label=nm)
         for data, name, mk in ((s, f"SPH {dx * 1000:g} mm", "o"), (sf, "SPH 2.5 mm", "s")):
             if data is None:
                 continue
@@ -734,29 +741,35 @@ def report(out=OUT):
 
 
 def _diagnostics(out):
-    """The bed variants side by side (q = 0.06, 5 mm): SPH - OF 2.5 mm per metric."""
-    have = [b for b in BEDS if (Path(out) / f"run_{label(0.06, DX, b)}_sph.json").exists()]
-    if len(have) < 2:
-        return []
-    cols = {b: {r["metric"]: r["sph_minus_of"] for r in compare(0.06, DX, out, b)} for b in have}
-    cost = {b: json.loads((Path(out) / f"run_{label(0.06, DX, b)}_sph.json").read_text()) for b in have}
+    """The bed variants side by side (5 mm): SPH - OF 2.5 mm per metric."""
     lines = [
-        "## Diagnostics: the bed as a body, or as the box floor with free or no slip (q = 0.06, 5 mm)",
+        "## Diagnostics: where the differences come from (5 mm)",
         "",
-        "`python -m verification.overflow_nappe_rigid_bed run 0.06 --bed box_free_slip|box_no_slip`: the "
-        "bed is the box's floor (y_min = 0.095 m) and the caisson a body above it. SPH − OF 2.5 mm:",
+        "`python -m verification.overflow_nappe_rigid_bed run Q --bed VARIANT`: `body` is the case; "
+        "`box_free_slip` / `box_no_slip` make the bed the box's floor (y_min = 0.095 m) with that wall "
+        "condition and the caisson a body above it; `body_long` moves the end wall and outlet to "
+        f"{LONG_OUTLET} m. "
+        "SPH − OF 2.5 mm, same metrics and ranges as above:",
         "",
-        "| metric | " + " | ".join(have) + " |",
-        "|---|" + "---|" * len(have),
     ]
-    for key in cols["body"]:
-        lines.append(f"| {key} | " + " | ".join(_fmt(cols[b].get(key)) for b in have) + " |")
-    lines.append(
-        "| CPU s / wall s / load | "
-        + " | ".join(f"{cost[b]['cpu_s']} / {cost[b]['wall_s']} / {cost[b]['load_1min']}" for b in have)
-        + " |"
-    )
-    return lines + [""]
+    found = False
+    for q in Q_CASES:
+        have = [b for b in BEDS if (Path(out) / f"run_{label(q, DX, b)}_sph.json").exists()]
+        if len(have) < 2:
+            continue
+        found = True
+        cols = {b: {r["metric"]: r["sph_minus_of"] for r in compare(q, DX, out, b)} for b in have}
+        cost = {b: json.loads((Path(out) / f"run_{label(q, DX, b)}_sph.json").read_text()) for b in have}
+        lines += [f"q = {q} m²/s:", "", "| metric | " + " | ".join(have) + " |", "|---|" + "---|" * len(have)]
+        for key in cols["body"]:
+            lines.append(f"| {key} | " + " | ".join(_fmt(cols[b].get(key)) for b in have) + " |")
+        lines.append(
+            "| CPU s / wall s / load | "
+            + " | ".join(f"{cost[b]['cpu_s']} / {cost[b]['wall_s']} / {cost[b]['load_1min']}" for b in have)
+            + " |"
+        )
+        lines.append("")
+    return lines if found else []
 
 
 def _fmt(v):
