@@ -87,6 +87,17 @@ def test_first_impact_follows_ballistics_and_openfoam(tmp_path):
         m = nappe.early_metrics(head, ref)
         assert m["front_x_max_abs_diff_m"] <= 0.005, m
         assert m["lowest_y_max_abs_diff_m"] <= 0.005, m
+    # the jet's surfaces two cells behind its head (reference_cases/README.md sec. 4's rule) follow the
+    # ballistic jet of a y_c-thick nappe within dx: the SPH inlet is round(y_c/dx) dx thick (105 mm
+    # for y_c = 107.2 mm), so its upper surface sits about 2.2 mm low (measured: upper 2.3 mm max, 2.1 mm
+    # rms; lower 1.1 mm max)
+    early = nappe.read(tmp_path / "early_q0p11_dx5mm_sph.csv")
+    u_c = (nappe.G * 0.11) ** (1 / 3)
+    sel = early[(early[:, 0] < 0.045) & (early[:, 1] <= u_c * early[:, 0] - 2 * 0.005)]
+    assert len(sel) >= 20
+    upper, lower = nappe.ballistic_surfaces(sel[:, 1], 0.11)
+    assert np.max(np.abs(sel[:, 2] - upper)) <= 0.005
+    assert np.max(np.abs(sel[:, 3] - lower)) <= 0.005
 
 
 @pytest.mark.nightly
