@@ -48,8 +48,11 @@ measured:
     tol = |OF 5 mm - OF 2.5 mm|         what a 5 mm discretisation costs a finite-volume solver here
         + |OF 3.33 mm - OF 2.5 mm|      the reference's own remaining mesh error
         + |SPH 5 mm - SPH 2.5 mm|       SPH's resolution error (only where the 2.5 mm SPH run exists)
-(the OpenFOAM terms from its manifest.json mesh_convergence; the SPH term from the committed 2.5 mm
-run's CSVs, run through the same metric). The velocity profile at x = 0.20 m is reported but not
+(the OpenFOAM terms from its CSVs, the same numbers as its manifest.json mesh_convergence; the SPH term
+from the committed 2.5 mm run's CSVs, run through the same metric). The same tolerance judges the 5 mm
+and the 2.5 mm SPH runs. Where SPH's resolution spread is large (the bed pressure), the tolerance is
+large with it: a pass there means "within SPH's own resolution uncertainty", which the results README
+states per metric. The velocity profile at x = 0.20 m is reported but not
 judged: the flow there is near critical and the outlet's boundary condition (zero gradient in
 OpenFOAM, a deletion zone in SPH) acts on it (reference_cases/README.md sec. 4, written before these
 runs: "compare SPH first at x <= 0.15 m"). Known model differences, not tolerated away: the bed is
@@ -523,9 +526,9 @@ def compare(q, dx=DX, out=OUT, bed="body"):
     s = load_sph(q, dx, out, bed)
     if s is None:
         raise FileNotFoundError(f"no saved SPH run {label(q, dx, bed)} in {out}")
-    fine = None
-    if dx != DX_FINE:  # the SPH 2.5 mm run: from `out`, else the committed one
-        fine = load_sph(q, DX_FINE, out) or load_sph(q, DX_FINE, OUT)
+    # the SPH 2.5 mm run (from `out`, else the committed one): its spread from 5 mm enters the tolerance,
+    # the same tolerance for both resolutions
+    fine = load_sph(q, DX_FINE, out) or load_sph(q, DX_FINE, OUT)
     ref = load_of(q, "2p5")
     rows = []
     for x_max, judged_range in ((X_JUDGED, True), (None, False)):
