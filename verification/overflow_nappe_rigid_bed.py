@@ -105,7 +105,31 @@ STUDY_RESOLUTIONS = (20, 40)
 NIGHTLY_STUDY_RESOLUTIONS = ()  # the 2.5 mm runs (~10 CPU min each) are committed, not rerun nightly
 NIGHTLY_NOTE = "5 mm, q = 0.06 and 0.11 to 3 s; the SPH 2.5 mm spread from the committed runs"
 # metric -> why it fails (measured, docs/scour_setup.md sec. 6); the nightly report lists these as known
-KNOWN_FAILURES: dict[str, str] = {}
+_CORNER = (
+    "5 mm: the bed-pressure spike within 2h of the caisson-bed corner (a concave body vertex has no "
+    "corner image)"
+)
+_LANDING = (
+    "the SPH jet loads the bed near its free-flight landing (x ~ 0.036 m at 2.5 mm), OpenFOAM's 35 mm "
+    "further on, over a low-pressure eddy SPH does not form (results README, item 5)"
+)
+_OUTLET = (
+    "the scour scene's outlet (deletion over the end wall) is a free overfall whose drawdown reaches "
+    "x < 0.15 m at q = 0.11; OpenFOAM's zero-gradient outlet is not (with the outlet at 0.50 m SPH is "
+    "within 2.2 mm / 5.1 mm / 6.0 %: results README, item 1)"
+)
+KNOWN_FAILURES: dict[str, str] = {
+    "q=0.06 bed_pressure_max_rel": _CORNER,
+    "q=0.06 x_bed_pressure_max_m": _CORNER,
+    "q=0.06 x_bed_pressure_max_beyond_corner_m": _LANDING,
+    "q=0.06 bed_pressure_rms_diff_over_max": _LANDING,
+    "q=0.11 bed_pressure_max_rel": _CORNER,
+    "q=0.11 x_bed_pressure_max_m": _CORNER,
+    "q=0.11 u_rms_diff_over_max_x0.10": _LANDING + "; 6.17 % against 6.11 %",
+    "q=0.11 depth_max_abs_diff_m": _OUTLET,
+    "q=0.11 nappe_upper_max_abs_diff_m": _OUTLET,
+    "q=0.11 u_rms_diff_over_max_x0.15": _OUTLET,
+}
 
 
 BEDS = ("body", "box_free_slip", "box_no_slip", "body_long")
