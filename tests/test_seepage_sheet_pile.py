@@ -1,0 +1,42 @@
+"""The sheet-pile cross-check against OpenFOAM (issue 10, item 5): the seed seepage's pore-water
+label that keeps it out of the density diffusion, and a CI-sized SPH run against the reference
+(the full comparison at 10 and 5 mm is in the nightly: verification/seepage_sheet_pile.py)."""
+
+import numpy as np
+import pytest
+
+from solver.plan import build_plan
+from verification.common import scene_from_file
+from verification import seepage_sheet_pile as sp
+
+
+def _diffusion(plan):
+    return next(t for t in plan.terms if t.name == "density diffusion")
+
+
+def test_seed_pore_water_is_labelled_and_left_out_of_the_density_diffusion():
+    """Seed form with saturated blocks: the plan carries pore_label (n for a saturated block's
+    pore water, 1 for free water) and the diffusion reads it (the kernel's pore-water exclusion is
+    tested against its twin in test_impact_terms.py); the EOS sees no fraction (true density).
+    The mixture keeps water_fraction; a scene without saturated blocks has neither."""
+    from solver.initial_state import create_particles
+
+    seed = sp.scene(10, 0.1, "seed", diffusion="fourtakas")
+    plan = build_plan(seed)
+    assert "pore_label" in plan.fields and "water_fraction" not in plan.fields
+    assert _diffusion(plan).fraction == "pore_label"
+    ps = create_particles(seed, plan)
+    n = ps.n_owned
+    water = np.flatnonzero(plan.materials.names.index("water") == ps["material"][:n])
+    y = ps["x"][water, 1]
+    label = ps["pore_label"][water]
+    assert np.all(label[y < sp.T] == sp.POROSITY)  # the beds' pore water
+    assert np.all(label[y > sp.T] == 1.0)  # the ponds
+    rho = ps["rho"][water]
+    assert rho.min() > 0.99 * 1000.0  # the seed's pore water is at its true density
+
+    mixture = build_plan(sp.scene(10, 0.1, "mixture", diffusion="fourtakas"))
+    assert "pore_label" not in mixture.fields and _diffusion(mixture).fraction == "water_fraction"
+
+    water_only = build_plan(scene_from_file("dam_break_2d.toml", **{"numerics.leapfrog": "seed"}))
+    assert "pore_label" not in water_only.fields and _diffusion(water_only).fraction is None
