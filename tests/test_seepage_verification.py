@@ -9,6 +9,7 @@ from verification import (
     seepage_bed_at_rest,
     seepage_critical_gradient,
     seepage_darcy,
+    seepage_sheet_pile,
     seepage_terzaghi,
 )
 
@@ -123,18 +124,22 @@ def test_critical_gradient_onset_mixture():
 
 
 # -- nightly: every case at its default resolution, all checks; the resolution studies ------------
-STUDIES = [seepage_bed_at_rest, seepage_darcy, seepage_terzaghi, seepage_critical_gradient]
+STUDIES = [
+    seepage_bed_at_rest, seepage_darcy, seepage_terzaghi, seepage_critical_gradient, seepage_sheet_pile,
+]  # fmt: skip
 KNOWN = pytest.mark.xfail(reason="known shortfalls at the default resolution: docs/seepage.md, Verification")
 CASES = [
     seepage_bed_at_rest,
     seepage_darcy,
     pytest.param(seepage_terzaghi, marks=KNOWN),
     seepage_critical_gradient,
+    seepage_sheet_pile,
 ]
+IDS = ["bed_at_rest", "darcy", "terzaghi", "critical_gradient", "sheet_pile"]
 
 
 @pytest.mark.nightly
-@pytest.mark.parametrize("case", CASES, ids=["bed_at_rest", "darcy", "terzaghi", "critical_gradient"])
+@pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_nightly_case_at_default_resolution(case, tmp_path):
     res = case.run(case.DEFAULT_RESOLUTION, out_dir=tmp_path)
     known = getattr(case, "KNOWN_FAILURES", {})
@@ -142,7 +147,7 @@ def test_nightly_case_at_default_resolution(case, tmp_path):
 
 
 @pytest.mark.nightly
-@pytest.mark.parametrize("case", STUDIES, ids=["bed_at_rest", "darcy", "terzaghi", "critical_gradient"])
+@pytest.mark.parametrize("case", STUDIES, ids=IDS)
 def test_nightly_resolution_study(case, tmp_path):
     from verification.common import study_failures
 

@@ -26,6 +26,7 @@ CASES = {
     "seepage_darcy": "verification.seepage_darcy",
     "seepage_terzaghi": "verification.seepage_terzaghi",
     "seepage_critical_gradient": "verification.seepage_critical_gradient",
+    "seepage_sheet_pile": "verification.seepage_sheet_pile",
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out
 NIGHTLY_CASES = {
