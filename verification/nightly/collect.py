@@ -146,8 +146,7 @@ def _tail(path, lines=40):
         return ""
 
 
-def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print, cpu_limit=None, jobs=1,
-            cost=None):
+def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print, cpu_limit=None, jobs=1, cost=None):
     """{name: record} for {name: module}, in the order of `cases`; `jobs` cases run at a time,
     the costliest first by `cost` ({name: CPU seconds}, e.g. the previous night's; an unknown
     case counts as the costliest, so a new case never starts last)."""
