@@ -67,7 +67,7 @@ def test_terzaghi_consolidation_runs_to_tv1(terzaghi_ci):
 
 @pytest.mark.slow
 def test_terzaghi_late_profiles_meet_the_goal(terzaghi_ci):
-    """dx = 10 mm: at T_v = 0.5 and 1 the profile error is within the issue's 2 % (1.5 %, 1.0 %
+    """dx = 10 mm: at T_v = 0.5 and 1 the profile error is within the issue's 2 % (0.5 %, 0.3 %
     measured). Guards the pore water against the density diffusion, which drained the column 1.85
     times too fast (17 % at T_v = 0.1, 16 % at 0.5: docs/seepage.md, "Density diffusion and pore water")."""
     errors = {tv: terzaghi_ci["tv"][tv]["error"] for tv in (0.5, 1.0)}
@@ -76,12 +76,9 @@ def test_terzaghi_late_profiles_meet_the_goal(terzaghi_ci):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known shortfall (docs/seepage.md): the profile error exceeds the issue's 2 % goal at "
-    "T_v = 0.1 and 0.2 (3.9 %, 2.2 % at dx = 10 mm; 5.2 %, 3.5 % at 5 mm: not converging with dx)",
-)
 def test_terzaghi_meets_the_issue_goal_at_every_tv(terzaghi_ci):
+    """dx = 10 mm: the profile error is within the issue's 2 % at T_v = 0.1, 0.2, 0.5 and 1 (1.9, 1.2,
+    0.5, 0.3 % measured; the T_v = 0.1 margin is thin: docs/seepage.md, case 3)."""
     errors = {tv: o["error"] for tv, o in terzaghi_ci["tv"].items()}
     assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
 
