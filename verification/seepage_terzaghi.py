@@ -54,7 +54,7 @@ U(T_v) = 1 - mean(u) / u0 against `terzaghi_degree` (reported).
 The seed's formulation has no storage term (the skeleton's compression does not squeeze the
 pore water) and no pore pressure on the skeleton: it cannot produce u0 = B q nor hand the load from
 the water to the skeleton. Started from the same pore pressure, its excess u drains by the water's
-own compressibility alone (c = k K_w / (gamma_w n), twice c_v,eff here) while its skeleton carries
+own compressibility alone (c = k K_w / (gamma_w n), 5 c_v,eff here) while its skeleton carries
 its dry weight and all of q from the start. The case says so and reports its u against the series.
 
 `resolution` = particles over H.
@@ -272,10 +272,12 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
         + f"; {r['steps']} steps, {r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU"
         for f, r in runs.items()
     ]  # fmt: skip
+    c_seed = K * ref["k_w"] / (sc.GAMMA_W * POROSITY)
     res.notes.append(
         "seed formulation: no storage term and no pore pressure on the skeleton: started from the same "
-        "u0 = B q, its excess drains by the water's own compressibility (c = k K_w / (gamma_w n) = 2 c_v,eff "
-        "here) and its skeleton never takes the load over: it cannot pass; its errors show by how much"
+        f"u0 = B q, its excess drains by the water's own compressibility (c = k K_w / (gamma_w n) = "
+        f"{c_seed / ref['c_eff']:.3g} c_v,eff here) and its skeleton never takes the load over: it cannot "
+        "pass; its errors show by how much"
     )
     if out_dir is not None:
         res.figure = figure(runs, Path(out_dir) / f"seepage_terzaghi_r{resolution}.png")
