@@ -50,6 +50,18 @@ def test_darcy_stiff_drag_k_1e5_runs():
     assert np.isfinite(lay["q"]) and abs(lay["error"]) <= seepage_darcy.TOLERANCE, (lay["q"], lay["i"])
 
 
+def test_mixture_pore_pressure_operators_disagree_off_lattice():
+    """The analysis behind the Darcy upper layer's miss (docs/seepage.md, case 2): on coincident
+    lattices the water's own pressure pass and the buoyancy pair have the same normalisation
+    (1.0105 at h = 1.3 dx), so the net n grad p carries it unamplified; with the pore water half a
+    dx off the fixed skeleton the pair's falls to 0.985 and the net, amplified by 1 / n, to 1.049."""
+    own, pair, net = seepage_darcy.pressure_force_factors(0.0)
+    assert own == pytest.approx(1.0105, abs=1e-4) and pair == pytest.approx(own, abs=1e-9)
+    assert net == pytest.approx(own, abs=1e-9)
+    own, pair, net = seepage_darcy.pressure_force_factors(0.5)
+    assert pair == pytest.approx(0.9852, abs=1e-4) and net == pytest.approx(1.0486, abs=1e-4)
+
+
 @pytest.fixture(scope="module")
 def terzaghi_ci():
     return seepage_terzaghi.run_one(10, "mixture")
