@@ -95,11 +95,11 @@ OUT = RESULTS / "seepage_sheet_pile"
 #    layer (the error analysis of seepage_bed_at_rest.py: h/D on its profiles): 0.065 at 10 mm.
 Q_TOLERANCE = 0.02
 Q_SOURCE = "issue 10's 2 % for a steady Darcy discharge, plus the reference's GCI"
-# The resolution study (10 and 5 mm, 1 s): window averages of Q/(k dH) 0.4068 and 0.3940
-# (+0.9 %, -2.2 %); their difference, 3.2 % of the reference, is the first-order estimate of the 5 mm
-# discretisation error (the reference's own order near the pile tip is 1.0-1.3). The CI sample uses
-# twice that at 10 mm (first order), plus the GCI:
-CI_Q_TOLERANCE = 2 * abs(0.4068 - 0.3940) / 0.40303
+# The CI sample (10 mm, 0.3 s, means over 0.15-0.3 s): the 10 mm discretisation error measured with
+# the pore water held on the lattice (Q/(k dH) 0.4227, +4.9 %, results/.../held_pore_water.md: the
+# error without the disorder) plus what the disorder moves Q by over that run at 10 mm (0.4195 at
+# 0.05 s to 0.4156 at 0.3 s: 1.0 %); the reference's GCI is added in the test.
+CI_Q_TOLERANCE = (0.4227 - 0.40303) / 0.40303 + (0.4195 - 0.4156) / 0.40303
 # Documented shortfalls at the default resolution (docs/seepage.md): shown as known by the nightly.
 KNOWN_FAILURES = {
     "seed: line x = w/2 + T/10, max normalised head error": "0.076 at 10 mm against h/T = 0.065 "
