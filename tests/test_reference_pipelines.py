@@ -104,6 +104,7 @@ def test_openfoam_lobovsky_tiny_files(tiny_lobovsky):
     assert lines[0].startswith("# tool=OpenFOAM v") and "H=0.3 m" in lines[0]
     assert lines[1] == "t_s,t_star,p_star_s1,p_star_s2,p_star_s3,p_star_s4,wall_depth_m"
     assert p["profile"].read_text().splitlines()[1] == "y_m,p_star_mean,alpha_mean"
+    assert p["strip"].read_text().splitlines()[1] == "t_s,t_star,depth_m,u_m_s,v_m_s"
     s = lobo.read_sensors(p["sensors"])
     # the wall is sampled every time step, and a step is at most maxDeltaT (>= 2 kHz)
     assert np.all(np.diff(s["t_star"]) > 0)

@@ -21,9 +21,10 @@ sensor face diameter seen edge-on in 2D; verification/data/README.md): the finit
 values weighted by their overlap with the segment. The run-up height on the wall is
 sum(alpha.water * dy) over the wall's faces.
 
-Outputs (data/): openfoam_h{N}_sensors.csv (t_s, t_star, p_star_s1..s4, wall_depth_m) and
+Outputs (data/): openfoam_h{N}_sensors.csv (t_s, t_star, p_star_s1..s4, wall_depth_m),
 openfoam_h{N}_wall_profile.csv (the wall pressure and alpha profile averaged over the plateau window
-t* 3-5.5); the run's metrics (verification.impact_pressure.metrics, the same functions as SPH) in
+t* 3-5.5) and openfoam_h{N}_strip.csv (every 0.05 s: mean depth and velocity of the water within
+0.1 m of the far wall); the run's metrics (verification.impact_pressure.metrics, the same functions as SPH) in
 manifest.json. Fields are written every 0.05 s into work/ (kept for analysis; not in git).
 """
 
@@ -34,7 +35,6 @@ import csv
 import json
 import math
 import os
-import re
 import shutil
 import sys
 import time
@@ -43,7 +43,12 @@ from pathlib import Path
 import numpy as np
 
 from reference_cases import _common as C
-from reference_cases.openfoam_dam_break_2d.run import foam_version, read_internal_field, solver_stats, time_dirs
+from reference_cases.openfoam_dam_break_2d.run import (
+    foam_version,
+    read_internal_field,
+    solver_stats,
+    time_dirs,
+)
 
 CASE_DIR = Path(__file__).resolve().parent
 TEMPLATE_DIR = CASE_DIR / "case"
@@ -61,6 +66,7 @@ T_END_STAR = 5.6
 SENSORS_Y = (0.003, 0.015, 0.030, 0.080)  # m (verification/data/README.md)
 SENSOR_DIAMETER = 0.0042  # m, second-hand (verification/data/README.md)
 PLATEAU = (3.0, 5.5)  # t*, the impact case's plateau window
+STRIP = 0.1  # m, the strip next to the far wall whose depth and velocity are recorded
 WRITE_INTERVAL = 0.05  # s, full fields (for analysis)
 MAX_CO = 0.5
 MAX_DT = 5.0e-4  # s: wall probes every step => >= 2 kHz
@@ -73,7 +79,8 @@ FOAM_ENV = {"WM_PROJECT_DIR": "/usr/share/openfoam"}
 TOP = {
     "open": {
         "TOP_PATCH": "patch",
-        "TOP_U": "        type            pressureInletOutletVelocity;\n        value           uniform (0 0 0);",
+        "TOP_U": "        type            pressureInletOutletVelocity;\n"
+        "        value           uniform (0 0 0);",
         "TOP_P": "        type            totalPressure;\n        p0              uniform 0;\n"
         "        value           uniform 0;",
         "TOP_ALPHA": "        type            inletOutlet;\n        inletValue      uniform 0;\n"
@@ -203,6 +210,41 @@ def water_area(case: Path, cells_per_h: int) -> np.ndarray:
     return np.array(out)
 
 
+def strip_series(case: Path, cells_per_h: int) -> dict:
+    """At every written time, over the strip within STRIP of the far wall: the water area per unit
+    strip width (a mean depth) and the water's mean velocity (alpha-weighted)."""
+    m = mesh(cells_per_h)
+    n = m["ny"] * (m["nx1"] + m["nx2"])
+    xc = read_internal_field(case / "0" / "C")[:, 0]
+    s = xc > LX - STRIP
+    out = {"t": [], "depth": [], "u": [], "v": []}
+    for t, d in time_dirs(case):
+        if not (d / "U").exists() or not (d / "alpha.water").exists():
+            continue
+        a = np.clip(read_internal_field(d / "alpha.water", n)[s], 0.0, 1.0)
+        a[a < 1e-6] = 0.0  # no velocity of an empty strip
+        u = read_internal_field(d / "U", n)[s]
+        area = a.sum() * m["dx2"] * m["dy"]
+        out["t"].append(t)
+        out["depth"].append(area / STRIP)
+        out["u"].append(float((a * u[:, 0]).sum() / a.sum()) if a.sum() > 0 else 0.0)
+        out["v"].append(float((a * u[:, 1]).sum() / a.sum()) if a.sum() > 0 else 0.0)
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def write_strip(path: Path, case: Path, cells_per_h: int, header: str) -> Path:
+    st = strip_series(case, cells_per_h)
+    with open(path, "w", newline="") as fh:
+        fh.write(
+            header + f"; strip x > {LX - STRIP:g} m: depth = water area / {STRIP} m, u and v alpha-weighted\n"
+        )
+        w = csv.writer(fh)
+        w.writerow(["t_s", "t_star", "depth_m", "u_m_s", "v_m_s"])
+        for t, d, u, v in zip(st["t"], st["depth"], st["u"], st["v"]):
+            w.writerow([f"{t:.6g}", f"{t / TIME_SCALE:.6g}", f"{d:.6g}", f"{u:.6g}", f"{v:.6g}"])
+    return path
+
+
 def impact_metrics(t_star: np.ndarray, p_star: np.ndarray) -> dict:
     """The impact case's metrics (verification.impact_pressure.metrics, the same code as for SPH).
     The plateau's moving average is the SPH scene's tau_ac = 4 H / c0 (c0 = 10 sqrt(2 g H)), so
@@ -215,7 +257,10 @@ def impact_metrics(t_star: np.ndarray, p_star: np.ndarray) -> dict:
 
 
 def write_outputs(out: Path, label: str, red: dict, header: str) -> dict:
-    paths = {"sensors": out / f"openfoam_{label}_sensors.csv", "profile": out / f"openfoam_{label}_wall_profile.csv"}
+    paths = {
+        "sensors": out / f"openfoam_{label}_sensors.csv",
+        "profile": out / f"openfoam_{label}_wall_profile.csv",
+    }
     with open(paths["sensors"], "w", newline="") as fh:
         fh.write(header + "; p_star = face-averaged p / (rho g H) over 4.2 mm; wall_depth = sum(alpha dy)\n")
         w = csv.writer(fh)
@@ -277,7 +322,9 @@ def run_case(
     C.run(["setFields"], work, logs / "setFields.log", env, cmds)
     solver_wall = C.run(["interFoam"], work, logs / "interFoam.log", env, cmds)
     cpu1 = os.times()
-    C.run(["postProcess", "-func", "writeCellCentres", "-time", "0"], work, logs / "cellCentres.log", env, cmds)
+    C.run(
+        ["postProcess", "-func", "writeCellCentres", "-time", "0"], work, logs / "cellCentres.log", env, cmds
+    )
     red = reduce_probes(work, cells_per_h)
     area = water_area(work, cells_per_h)
     total_wall = time.perf_counter() - t0
@@ -287,10 +334,14 @@ def run_case(
     n_cells = m["ny"] * (m["nx1"] + m["nx2"])
     header = (
         f"# tool=OpenFOAM {version} interFoam (laminar VOF), Debian package openfoam "
-        f"{C.debian_package_version('openfoam')}; mesh=({m['nx1']}+{m['nx2']})x{m['ny']}x1, dy=H/{cells_per_h}; "
+        f"{C.debian_package_version('openfoam')}; mesh=({m['nx1']}+{m['nx2']})x{m['ny']}x1, "
+        f"dy=H/{cells_per_h}; "
         f"Lobovsky 2014 H={H} m, tank {LX} x {LY} m {top} top, column {XC} x {H} m, no gate, {walls} walls"
     )
     paths = write_outputs(out, label.removesuffix("_tiny"), red, header)
+    paths["strip"] = write_strip(
+        out / f"openfoam_{label.removesuffix('_tiny')}_strip.csv", work, cells_per_h, header
+    )
     ts = red["t"] / TIME_SCALE
     dt_samples = np.diff(red["t"])
     entry = {
@@ -307,8 +358,9 @@ def run_case(
         "tiny": tiny,
         "wall_time_total_s": round(total_wall, 1),
         "wall_time_solver_s": round(solver_wall, 1),
-        "cpu_time_solver_s": round(cpu1.children_user - cpu0.children_user + cpu1.children_system
-                                   - cpu0.children_system, 1),  # fmt: skip
+        "cpu_time_solver_s": round(
+            cpu1.children_user - cpu0.children_user + cpu1.children_system - cpu0.children_system, 1
+        ),  # fmt: skip
         "solver": solver_stats(logs / "interFoam.log"),
         "wall_samples": len(ts),
         "wall_sample_interval_max_s": float(dt_samples.max()) if len(dt_samples) else None,
@@ -348,8 +400,9 @@ def run_case(
             "sensor_value": "overlap-weighted mean of the wall-face p over the segment, every time step",
         },
         "environment": FOAM_ENV,
-        "source": "Lobovsky, L., Botia-Vera, E., Castellana, F., Mas-Soler, J. & Souto-Iglesias, A. (2014). "
-        "Experimental investigation of dynamic pressure loads during dam break. J. Fluids Struct. 48, 407-434.",
+        "source": "Lobovsky, L., Botia-Vera, E., Castellana, F., Mas-Soler, J. & Souto-Iglesias, A. "
+        "(2014). Experimental investigation of dynamic pressure loads during dam break. "
+        "J. Fluids Struct. 48, 407-434.",
     }
     if official:
         C.update_manifest(MANIFEST, label, entry, top)
@@ -360,14 +413,18 @@ def run_case(
 
 def summary() -> str:
     data = json.loads(MANIFEST.read_text())
-    lines = ["| mesh | cells | steps | wall s (CPU s) | load | impact t* s2 | plateau mean s2 | sd s2 | peak s1/s2 |",
-             "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        "| run | cells | steps | wall s (CPU s) | load | impact t* s2 | plateau mean s2 | sd s2 "
+        "| peak s1/s2 |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for key, e in data["runs"].items():
         mt = e["metrics"]
         lines.append(
             f"| {key} | {e['n_cells']} | {e['solver']['time_steps']} | {e['wall_time_total_s']} "
             f"({e.get('cpu_time_solver_s')}) | {e['host']['load_avg_at_end']} | {mt.get('impact_s2')} | "
-            f"{mt.get('plateau_mean_s2')} | {mt.get('plateau_sd_s2')} | {mt.get('peak_s1')}/{mt.get('peak_s2')} |"
+            f"{mt.get('plateau_mean_s2')} | {mt.get('plateau_sd_s2')} | "
+            f"{mt.get('peak_s1')}/{mt.get('peak_s2')} |"
         )
     return "\n".join(lines)
 
@@ -382,16 +439,28 @@ def main(argv=None) -> int:
     p.add_argument("--walls", choices=WALLS, default="noSlip", help="noSlip (default) or slip walls")
     p.add_argument("--nice", type=int, default=0, help="raise the niceness of the tool runs")
     p.add_argument("--summary", action="store_true", help="print the manifest's runs as a table")
+    p.add_argument("--strip-only", action="store_true", help="(re)write the strip series of an existing run")
     a = p.parse_args(argv)
     if a.summary:
         print(summary())
+        return 0
+    if a.strip_only:
+        # the strip series of an existing official run (work/h{N}), e.g. one made before it existed
+        label = f"h{a.cells_per_H}" + variant(a.top, a.walls)
+        head = (DATA_DIR / f"openfoam_{label}_sensors.csv").read_text().splitlines()[0].split("; p_star")[0]
+        path = write_strip(DATA_DIR / f"openfoam_{label}_strip.csv", WORK_DIR / label, a.cells_per_H, head)
+        entry = json.loads(MANIFEST.read_text())["runs"][label]
+        entry["outputs"]["strip"] = str(C._rel(path))
+        C.update_manifest(MANIFEST, label, entry, {})
+        print("wrote", path)
         return 0
     if a.nice:
         os.nice(a.nice)
     res = run_case(a.cells_per_H, a.tiny, a.out, a.end_star, a.top, a.walls)
     e = res["entry"]
     print(
-        f"{res['label']}: {e['n_cells']} cells, {e['solver']['time_steps']} steps, wall {e['wall_time_total_s']} s "
+        f"{res['label']}: {e['n_cells']} cells, {e['solver']['time_steps']} steps, "
+        f"wall {e['wall_time_total_s']} s "
         f"(solver {e['wall_time_solver_s']} s, CPU {e['cpu_time_solver_s']} s), water area drift "
         f"{e['water_area_max_rel_change']:.2e}; metrics {e['metrics']}"
     )
