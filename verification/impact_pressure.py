@@ -59,6 +59,7 @@ Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from pathlib import Path
@@ -77,6 +78,7 @@ from .common import (
     Check,
     case_main,
     read_csv,
+    reference_case_dir,
     richardson,
     save_figure,
     save_study,
@@ -102,6 +104,8 @@ DEFAULT_RESOLUTION = 20  # particles over H
 STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
 STUDY = RESULTS / "impact_pressure" / "study.csv"
 TIME_SCALE = math.sqrt(H / G)
+# the same tank in 2D with OpenFOAM interFoam (laminar VOF): what the 2D model gives without SPH
+OPENFOAM_CASE = reference_case_dir("openfoam_lobovsky_impact")
 PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
 # Checks expected to fail until the model changes (the nightly report shows them as known failures and
 # flags them if they pass, like the strict xfail in tests/test_verification.py)
@@ -243,6 +247,31 @@ def experiment():
         for r in read_csv("lobovsky2014_h300_peak_statistics.csv")
     ]
     return events, band, peaks
+
+
+def openfoam_reference():
+    """{run label: {"cells_per_H", "top", "walls", "t_star", "p_star"[n, 4]}} of every interFoam run the
+    reference case's manifest lists (reference_cases/openfoam_lobovsky_impact). Missing files are an
+    error, never a silently dropped comparison."""
+    manifest = OPENFOAM_CASE / "manifest.json"
+    if not manifest.is_file():
+        raise FileNotFoundError(f"OpenFOAM reference manifest missing: {manifest}")
+    out = {}
+    for label, r in json.loads(manifest.read_text())["runs"].items():
+        path = OPENFOAM_CASE / "data" / Path(r["outputs"]["sensors"]).name
+        if not path.is_file():
+            raise FileNotFoundError(f"OpenFOAM reference data missing (listed in {manifest}): {path}")
+        arr = np.loadtxt(path, delimiter=",", comments="#", skiprows=2)
+        out[label] = {k: r[k] for k in ("cells_per_H", "top", "walls")}
+        out[label].update(t_star=arr[:, 1], p_star=arr[:, 2:6])
+    return out
+
+
+def openfoam_finest():
+    """The finest interFoam run of the reference set-up (open top, noSlip walls): (label, run)."""
+    runs = {k: r for k, r in openfoam_reference().items() if r["top"] == "open" and r["walls"] == "noSlip"}
+    label = max(runs, key=lambda k: runs[k]["cells_per_H"])
+    return label, runs[label]
 
 
 def band_statistics(band):
@@ -454,6 +483,10 @@ def plot(sim_run, events, band, path):
 
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     t, p = sim_run["t_star"], sim_run["p_star"]
+    try:
+        foam = openfoam_finest()
+    except (FileNotFoundError, ValueError):
+        foam = None  # the figure without the reference; the note in run() names the missing file
     for k, ax in enumerate(axes.flat):
         te, pe = events[k]
         ge, fe, _ = filtered(te, pe)
@@ -461,6 +494,9 @@ def plot(sim_run, events, band, path):
         if k == 1:
             bt, lo, _, hi = band
             ax.fill_between(bt, lo, hi, color="0.85", label="2.5-97.5 % of the repetitions")
+        if foam is not None:
+            g, f, _ = filtered(foam[1]["t_star"], foam[1]["p_star"][:, k])
+            ax.plot(g, f, color="C2", lw=1.0, label=f"2D interFoam H/{foam[1]['cells_per_H']} (1 ms filter)")
         if len(t) > 1:
             g, f, _ = filtered(t, p[:, k])
             ax.plot(g, f, color="C0", lw=0.6, label="SPH (face average, 1 ms filter)")

@@ -1,0 +1,259 @@
+"""The 2D interFoam reference against the experiment and SPH, with the impact case's own metrics
+(verification/impact_pressure.py: filtered, impact_time, window_mean_sd, metrics, band_statistics).
+
+    python -m reference_cases.openfoam_lobovsky_impact.compare [--sph-fields R=RUN.npz ...]
+
+RUN.npz: an SPH run recorded by `python -m verification.impact_study.fields RUN.npz R` (sensors, the
+wall pressure profile, the depth and velocity of the water within 0.1 m of the far wall); without
+it the SPH rows come from the committed study (verification/results/impact_pressure/study.csv).
+Writes data/comparison.md, data/comparison.csv, data/comparison.png and the manifest's
+"comparison" section.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from reference_cases import _common as C
+from reference_cases.openfoam_lobovsky_impact import run as R
+from verification import impact_pressure as ip
+
+GRADIENT_PAIR = (1, 3)  # sensors 2 and 4 (15 and 80 mm): the wall pressure gradient between them
+KEYS = ("impact_s2", "plateau_mean_s2", "plateau_sd_s2", "plateau_mean_s1", "plateau_mean_s4", "peak_s1",
+        "peak_s2", "peak_s3")  # fmt: skip
+
+
+def gradient(m: dict) -> float:
+    """Mean wall pressure gradient between sensors 2 and 4 over the plateau, in rho g (hydrostatic = 1)."""
+    a, b = GRADIENT_PAIR
+    dy = ip.SENSORS_Y[b] - ip.SENSORS_Y[a]
+    return (m[f"plateau_mean_s{a + 1}"] - m[f"plateau_mean_s{b + 1}"]) * ip.H / dy
+
+
+def event_metrics(events) -> dict:
+    """The case's metrics of the measured event 5 (each sensor has its own time base)."""
+    out = {}
+    tau = ip.acoustic_window(10.0 * np.sqrt(2.0 * ip.G * ip.H))
+    for k, (te, pe) in enumerate(events):
+        g, f, _ = ip.filtered(te, pe)
+        out[f"impact_s{k + 1}"] = ip.impact_time(g, f)
+        out[f"peak_s{k + 1}"] = float(f.max())
+        ga, fa, _ = ip.filtered(te, pe, tau)
+        out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = ip.window_mean_sd(ga, fa)
+    return out
+
+
+def sph_rows(fields: dict) -> dict:
+    """SPH metrics per resolution: from recorded runs where given, else the committed study."""
+    rows = {}
+    with open(ip.STUDY) as fh:
+        for r in csv.DictReader(fh):
+            rows[f"SPH H/{r['resolution']} (study)"] = {k: float(r[k]) for k in KEYS if k in r}
+    for res, d in sorted(fields.items()):
+        c0 = 10.0 * np.sqrt(2.0 * ip.G * ip.H)
+        run = {"t_star": d["sensor_t_star"], "p_star": d["sensor_p_star"], "status": "completed",
+               "reflections": 0, "c0": c0}  # fmt: skip
+        rows[f"SPH H/{res} (fields run)"] = ip.metrics(run)
+    return rows
+
+
+def table(rows: dict, ref: dict) -> list[str]:
+    lines = [
+        "| source | impact t* s2 | plateau mean s2 (minus band median) | plateau sd s2 | mean s1 | mean s4 "
+        "| gradient s2-s4 (rho g) | peak s1 / s2 / s3 |",
+        "|---|---|---|---|---|---|---|---|",
+        f"| experiment, band of 100 repetitions | {ref['impact_earliest']:.3f}-{ref['impact_latest']:.3f} | "
+        f"{ref['plateau_median']:.3f} +- {ref['plateau_half_width']:.3f} | | | | | |",
+    ]
+
+    def f(m, k, fmt=".3f"):
+        v = m.get(k, float("nan"))
+        return "" if not np.isfinite(v) else format(v, fmt)
+
+    for name, m in rows.items():
+        grad = (
+            gradient(m)
+            if "plateau_mean_s4" in m and np.isfinite(m.get("plateau_mean_s4", np.nan))
+            else np.nan
+        )
+        dm = m.get("plateau_mean_s2", np.nan) - ref["plateau_median"]
+        lines.append(
+            f"| {name} | {f(m, 'impact_s2')} | {f(m, 'plateau_mean_s2')} ({dm:+.3f}) "
+            f"| {f(m, 'plateau_sd_s2')} "
+            f"| {f(m, 'plateau_mean_s1')} | {f(m, 'plateau_mean_s4')} | "
+            f"{'' if not np.isfinite(grad) else format(grad, '.2f')} | "
+            f"{f(m, 'peak_s1', '.2f')} / {f(m, 'peak_s2', '.2f')} / {f(m, 'peak_s3', '.2f')} |"
+        )
+    return lines
+
+
+def mesh_spread(foam_rows: dict) -> dict:
+    """Spread of the plateau mean at sensor 2 over the interFoam meshes of the reference set-up, and
+    the Richardson estimate where three meshes converge monotonically (verification.common)."""
+    from verification.common import GCI_SAFETY, richardson
+
+    ref = {int(k.split("H/")[1]): m for k, m in foam_rows.items() if k.startswith("interFoam H/")}
+    out = {}
+    for key in ("plateau_mean_s2", "impact_s2", "plateau_sd_s2"):
+        vals = {n: ref[n][key] for n in sorted(ref)}
+        entry = {
+            "values": {f"H/{n}": round(v, 4) for n, v in vals.items()},
+            "spread": round(np.ptp(list(vals.values())), 4),
+        }
+        if len(vals) >= 3:
+            fit = richardson([ip.H / n for n in vals], list(vals.values()))
+            if fit is not None:
+                finest = max(vals)
+                entry["richardson_limit"] = round(float(fit[1]), 4)
+                entry["gci_finest"] = round(GCI_SAFETY * abs(vals[finest] - fit[1]), 4)
+        out[key] = entry
+    return out
+
+
+def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tau = ip.acoustic_window(10.0 * np.sqrt(2.0 * ip.G * ip.H))
+    fig, axes = plt.subplots(2, 2, figsize=(12, 8))
+    ax = axes[0, 0]
+    bt, lo, _, hi = band
+    ax.fill_between(bt, lo, hi, color="0.85", label="experiment: 2.5-97.5 % of 100 repetitions")
+    te, pe = events[1]
+    ax.plot(*ip.filtered(te, pe)[:2], color="0.4", lw=0.8, label="experiment, event 5 (1 ms)")
+    for i, (_label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
+        if r["top"] != "open" or r["walls"] != "noSlip":
+            continue
+        g, fa, _ = ip.filtered(r["t_star"], r["p_star"][:, 1])
+        ax.plot(g, fa, color=f"C{2 + i}", lw=1.0, label=f"2D interFoam H/{r['cells_per_H']} (1 ms)")
+    for res, d in sorted(fields.items()):
+        g, fa, _ = ip.filtered(d["sensor_t_star"], d["sensor_p_star"][:, 1], tau)
+        ax.plot(g, fa, color="C3", lw=1.2, label=f"SPH H/{res} (acoustic filter {tau * 1000:.0f} ms)")
+    ax.set_xlim(2.0, 5.6)
+    ax.set_ylim(-0.2, 2.5)
+    ax.set_xlabel("t sqrt(g/H)")
+    ax.set_ylabel("p / (rho g H), sensor 2 (15 mm)")
+    ax.legend(fontsize=7)
+    ax.set_title("sensor 2")
+
+    ax = axes[0, 1]
+    for i, (label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
+        if r["top"] != "open" or r["walls"] != "noSlip":
+            continue
+        prof = np.loadtxt(R.DATA_DIR / f"openfoam_{label}_wall_profile.csv", delimiter=",", skiprows=2)
+        ax.plot(prof[:, 1], prof[:, 0], color=f"C{2 + i}", label=f"interFoam H/{r['cells_per_H']}")
+    for res, d in sorted(fields.items()):
+        w = (d["t_star"] >= ip.PLATEAU[0]) & (d["t_star"] <= ip.PLATEAU[1])
+        ax.plot(d["profile"][w].mean(axis=0), d["profile_y"], color="C3", label=f"SPH H/{res} (probe)")
+    em = event_metrics(events)
+    ax.plot([em[f"plateau_mean_s{k + 1}"] for k in range(4)], ip.SENSORS_Y, "ks", label="experiment, event 5")
+    ax.set_ylim(0, 0.3)
+    ax.set_xlabel("mean p / (rho g H) over t* 3-5.5")
+    ax.set_ylabel("height on the far wall (m)")
+    ax.legend(fontsize=7)
+    ax.set_title("wall pressure profile, plateau mean")
+
+    for ax, (col, name) in zip(axes[1], (("depth_m", "depth"), ("u_m_s", "u"))):
+        for i, (label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
+            if r["top"] != "open" or r["walls"] != "noSlip":
+                continue
+            strip = R.DATA_DIR / f"openfoam_{label}_strip.csv"
+            if not strip.is_file():
+                continue
+            with open(strip) as fh:
+                rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
+            t = np.array([float(x["t_star"]) for x in rows])
+            ax.plot(t, [float(x[col]) for x in rows], "o-", ms=3, color=f"C{2 + i}",
+                    label=f"interFoam H/{r['cells_per_H']}" + ("" if name == "depth" else " u"))  # fmt: skip
+            if name == "u":
+                ax.plot(t, [float(x["v_m_s"]) for x in rows], "s--", ms=3, color=f"C{2 + i}",
+                        label=f"interFoam H/{r['cells_per_H']} v")  # fmt: skip
+        for res, d in sorted(fields.items()):
+            if name == "depth":
+                ax.plot(d["t_star"], d["depth"], color="C3", label=f"SPH H/{res}")
+            else:
+                ax.plot(d["t_star"], d["u"], color="C3", label=f"SPH H/{res} u")
+                ax.plot(d["t_star"], d["v"], color="C3", ls="--", label=f"SPH H/{res} v")
+        ax.set_xlim(2.0, 5.6)
+        ax.set_xlabel("t sqrt(g/H)")
+        ax.set_ylabel("mean depth (m)" if name == "depth" else "mean velocity (m/s)")
+        ax.set_title(f"water within {R.STRIP} m of the far wall: " + ("area / width" if name == "depth" else
+                     "mean u (solid), v (dashed)"))  # fmt: skip
+        ax.legend(fontsize=7)
+    fig.suptitle("Lobovsky et al. (2014) H = 0.3 m: 2D interFoam vs experiment vs SPH")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument(
+        "--sph-fields", nargs="*", default=[], help="R=RUN.npz from verification.impact_study.fields"
+    )
+    a = p.parse_args(argv)
+    fields = {}
+    for item in a.sph_fields:
+        res, path = item.split("=", 1)
+        fields[int(res)] = dict(np.load(path))
+    foam = ip.openfoam_reference()
+    events, band, _ = ip.experiment()
+    ref = ip.band_statistics(band)
+    c0 = 10.0 * np.sqrt(2.0 * ip.G * ip.H)
+    rows = {"experiment, event 5": event_metrics(events)}
+    foam_rows = {}
+    for r in sorted(foam.values(), key=lambda r: (r["top"], r["walls"], r["cells_per_H"])):
+        name = f"interFoam H/{r['cells_per_H']}" + R.variant(r["top"], r["walls"]).replace("_", ", ")
+        foam_rows[name] = ip.metrics({"t_star": r["t_star"], "p_star": r["p_star"], "status": "completed",
+                                      "reflections": 0, "c0": c0})  # fmt: skip
+    rows.update(foam_rows)
+    rows.update(sph_rows(fields))
+    lines = table(rows, ref)
+    spread = mesh_spread(foam_rows)
+    md = R.DATA_DIR / "comparison.md"
+    md.write_text(
+        "# Lobovsky et al. (2014) H = 0.3 m: 2D interFoam vs experiment vs SPH (sensor 2 unless named)\n\n"
+        "Written by `python -m reference_cases.openfoam_lobovsky_impact.compare`; metrics of\n"
+        "verification/impact_pressure.py (impact and peaks after the 1 ms filter, plateau mean and sd over\n"
+        "t* 3-5.5 after the acoustic filter 4H/c0 = 49 ms, for all sources alike); p* = p/(rho g H).\n"
+        "Gradient: (mean p at sensor 2 - mean p at sensor 4) / 65 mm, in rho g (hydrostatic = 1).\n\n"
+        + "\n".join(lines)
+        + "\n\ninterFoam mesh spread (open top, noSlip): "
+        + json.dumps(spread)
+        + "\n"
+    )
+    with open(R.DATA_DIR / "comparison.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["source", *KEYS, "gradient_s2_s4_rho_g"])
+        for name, m in rows.items():
+            g = gradient(m) if np.isfinite(m.get("plateau_mean_s4", np.nan)) else float("nan")
+            w.writerow([name, *[f"{m.get(k, float('nan')):.5g}" for k in KEYS], f"{g:.4g}"])
+    fig = plot(foam, fields, events, band, R.DATA_DIR / "comparison.png")
+    C.set_manifest_section(
+        R.MANIFEST,
+        "comparison",
+        {
+            "command": "python -m reference_cases.openfoam_lobovsky_impact.compare "
+            + " ".join(f"--sph-fields {x}" for x in a.sph_fields),
+            "band": {k: round(v, 4) for k, v in ref.items()},
+            "interfoam_mesh_spread": spread,
+            "outputs": [str(C._rel(md)), str(C._rel(R.DATA_DIR / "comparison.csv")), str(C._rel(fig))],
+        },
+    )
+    print("\n".join(lines))
+    print("mesh spread:", json.dumps(spread))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
