@@ -107,6 +107,7 @@ TIME_SCALE = math.sqrt(H / G)
 # the same tank in 2D with OpenFOAM interFoam (laminar VOF): what the 2D model gives without SPH
 OPENFOAM_CASE = reference_case_dir("openfoam_lobovsky_impact")
 PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
+PLATEAU_MEAN_2D = "plateau mean p* at sensor 2, t* 3-5.5, minus the 2D interFoam reference"
 # Checks expected to fail until the model changes (the nightly report shows them as known failures and
 # flags them if they pass, like the strict xfail in tests/test_verification.py)
 KNOWN_FAILURES = {
@@ -274,6 +275,31 @@ def openfoam_finest():
     return label, runs[label]
 
 
+def openfoam_plateau_mean(c0):
+    """Plateau mean p* at sensor 2 of the 2D interFoam reference (finest mesh of the reference set-up,
+    the same metric and acoustic filter as the SPH run with sound speed c0) and its mesh uncertainty:
+    GCI_SAFETY |f - f0| against the Richardson limit where three meshes converge monotonically
+    (Roache 1998), else the difference between the two finest meshes (a first-order estimate)."""
+    runs = {
+        r["cells_per_H"]: r
+        for r in openfoam_reference().values()
+        if r["top"] == "open" and r["walls"] == "noSlip"
+    }
+    vals = {}
+    for n, r in sorted(runs.items()):
+        m = metrics(
+            {"t_star": r["t_star"], "p_star": r["p_star"], "status": "completed", "reflections": 0, "c0": c0}
+        )
+        vals[n] = m["plateau_mean_s2"]
+    finest = max(vals)
+    if len(vals) >= 3:
+        fit = richardson([H / n for n in vals], list(vals.values()))
+        if fit is not None:
+            return vals[finest], GCI_SAFETY * abs(vals[finest] - fit[1]), finest
+    coarser = sorted(vals)[-2] if len(vals) > 1 else finest
+    return vals[finest], abs(vals[finest] - vals[coarser]), finest
+
+
 def band_statistics(band):
     t, lo, med, hi = band
     w = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
@@ -438,6 +464,17 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
             ref["plateau_half_width"] + e_mean,
             f"half-width of the repetitions' band ({ref['plateau_half_width']:.3f}) "
             f"+ discretisation {e_mean:.3f}",
+        )
+    )
+    foam_mean, foam_u, foam_n = openfoam_plateau_mean(sim_run["c0"])
+    res.checks.append(
+        Check(
+            PLATEAU_MEAN_2D,
+            m.get("plateau_mean_s2", float("nan")) - foam_mean,
+            foam_u + e_mean,
+            f"2D interFoam of the same tank, H/{foam_n}: {foam_mean:.3f} "
+            "(reference_cases/openfoam_lobovsky_impact); "
+            f"its mesh uncertainty {foam_u:.3f} + SPH discretisation {e_mean:.3f}",
         )
     )
     e_sd = allowance("plateau_sd_s2", resolution)

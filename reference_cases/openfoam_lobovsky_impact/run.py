@@ -94,6 +94,9 @@ TOP = {
     },
 }
 WALLS = ("noSlip", "slip")  # noSlip: the physical wall (default); slip: the SPH scene's free slip
+# the committed runs (cells per H, top, walls): the mesh study, then the SPH scene's lid and free slip
+STUDY = [(20, "open", "noSlip"), (40, "open", "noSlip"), (60, "open", "noSlip"), (20, "closed", "noSlip"),
+         (20, "open", "slip"), (40, "closed", "noSlip"), (40, "open", "slip")]  # fmt: skip
 
 
 # ----------------------------------------------------------------------------- set-up
