@@ -136,15 +136,17 @@ def impact_ci(tmp_path_factory):
 
 
 PLATEAU_MEAN = impact_pressure.PLATEAU_MEAN
+PLATEAU_MEAN_2D = impact_pressure.PLATEAU_MEAN_2D
 PLATEAU_NOISE = "plateau noise: sd of the acoustically filtered p* at sensor 2, t* 3-5.5"
 
 
 @pytest.mark.slow
 def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
     """No blow-up, zero wall reflections, impact time inside the experiment's window (the plateau
-    mean is a known discrepancy, pinned by a strict xfail)."""
+    mean is a known discrepancy against the experiment and the 2D interFoam reference alike, pinned by
+    strict xfails)."""
     assert impact_ci.figure.is_file()
-    known = (PLATEAU_MEAN,)
+    known = (PLATEAU_MEAN, PLATEAU_MEAN_2D)
     failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric not in known]
     assert not failed, "\n".join(failed)
 
@@ -170,6 +172,18 @@ def test_impact_plateau_noise_at_ci_resolution(impact_ci):
 )
 def test_impact_plateau_mean_at_ci_resolution(impact_ci):
     check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)
+    assert check.passed, check.line()
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="known SPH error: a 2D interFoam run of the same tank (reference_cases/openfoam_lobovsky_impact) "
+    "puts the plateau at sensor 2 inside the repetitions' band (0.61 / 0.59 at H/20 / H/40), SPH 0.2 above "
+    "it: the excess is not the 2D idealisation",
+)
+def test_impact_plateau_mean_against_2d_interfoam(impact_ci):
+    check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN_2D)
     assert check.passed, check.line()
 
 
