@@ -25,6 +25,8 @@ from reference_cases.openfoam_lobovsky_impact import run as R
 from verification import impact_pressure as ip
 
 GRADIENT_PAIR = (1, 3)  # sensors 2 and 4 (15 and 80 mm): the wall pressure gradient between them
+FOAM_COLORS = ("C2", "C1", "C4")  # interFoam meshes, coarse to fine
+SPH_COLOR = "C0"
 KEYS = ("impact_s2", "plateau_mean_s2", "plateau_sd_s2", "plateau_mean_s1", "plateau_mean_s4", "peak_s1",
         "peak_s2", "peak_s3")  # fmt: skip
 
@@ -98,7 +100,7 @@ def mesh_spread(foam_rows: dict) -> dict:
     the Richardson estimate where three meshes converge monotonically (verification.common)."""
     from verification.common import GCI_SAFETY, richardson
 
-    ref = {int(k.split("H/")[1]): m for k, m in foam_rows.items() if k.startswith("interFoam H/")}
+    ref = {int(k.split("H/")[1]): m for k, m in foam_rows.items() if k.split("H/")[1].isdigit()}
     out = {}
     for key in ("plateau_mean_s2", "impact_s2", "plateau_sd_s2"):
         vals = {n: ref[n][key] for n in sorted(ref)}
@@ -114,6 +116,95 @@ def mesh_spread(foam_rows: dict) -> dict:
                 entry["gci_finest"] = round(GCI_SAFETY * abs(vals[finest] - fit[1]), 4)
         out[key] = entry
     return out
+
+
+def foot_boxes_openfoam(label: str, cells_per_h: int, box_w: float, box_y: np.ndarray) -> np.ndarray | None:
+    """Mean p* (alpha- and area-weighted cell values) in boxes at the foot of the far wall (x > 1.61 m -
+    box_w, y bands box_y), averaged over the fields written inside the plateau window (every 0.05 s);
+    None without the run's fields (work/ is not in git)."""
+    from reference_cases.openfoam_dam_break_2d.run import read_internal_field, time_dirs
+
+    case = R.WORK_DIR / label
+    if not (case / "0" / "C").is_file():
+        return None
+    m = R.mesh(cells_per_h)
+    n = m["ny"] * (m["nx1"] + m["nx2"])
+    c = read_internal_field(case / "0" / "C")
+    inside = c[:, 0] > R.LX - box_w
+    k = np.digitize(c[:, 1], box_y) - 1
+    rows = []
+    for t, d in time_dirs(case):
+        if not ip.PLATEAU[0] <= t / ip.TIME_SCALE <= ip.PLATEAU[1] or not (d / "p").is_file():
+            continue
+        a = np.clip(read_internal_field(d / "alpha.water", n), 0.0, 1.0)
+        p = read_internal_field(d / "p", n) / (ip.RHO0 * ip.G * ip.H)
+        rows.append([np.sum((a * p)[inside & (k == j)]) / max(np.sum(a[inside & (k == j)]), 1e-12)
+                     for j in range(len(box_y) - 1)])  # fmt: skip
+    return np.mean(rows, axis=0) if rows else None
+
+
+def wall_force(y: np.ndarray, p: np.ndarray, top: float = 0.3) -> float:
+    """Integral of p* over the wall from 0 to `top` (trapezoid, p held at the ends), in rho g H^2."""
+    yy = np.concatenate([[0.0], y[y < top], [top]])
+    pp = np.interp(yy, y, p)
+    return float(np.sum(0.5 * (pp[1:] + pp[:-1]) * np.diff(yy)) / ip.H)
+
+
+def field_table(foam: dict, fields: dict) -> list[str]:
+    """Where SPH differs from interFoam: the wall force, the pressure at the wall's foot (the particles'
+    own p against the cells'), and the water's depth and mean velocity within 0.1 m of the wall."""
+    lines = []
+    win = ip.PLATEAU
+    for res, d in sorted(fields.items()):
+        w = (d["t_star"] >= win[0]) & (d["t_star"] <= win[1])
+        prof = d["profile"][w].mean(axis=0)
+        lines.append(
+            f"SPH H/{res}: wall force 0-0.3 m (probe profile) "
+            f"{wall_force(d['profile_y'], prof):.4f} rho g H^2"
+        )
+        if "box_p" in d:
+            boxes = np.nanmean(d["box_p"][w], axis=0)
+            edges = d["box_y"]
+            lines.append(
+                f"SPH H/{res}: mean particle p* within {float(d['box_w']) * 1000:.0f} mm of the wall, "
+                "y bands (mm) "
+                + ", ".join(
+                    f"{edges[j] * 1000:.0f}-{edges[j + 1] * 1000:.0f}: {boxes[j]:.3f}"
+                    for j in range(len(boxes))
+                )
+            )
+        for name, col in (("depth", "depth"), ("u", "u"), ("v", "v")):
+            lines.append(f"SPH H/{res}: strip {name} mean over t* 3-5.5: {d[col][w].mean():.3f}")
+    for label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
+        if r["top"] != "open" or r["walls"] != "noSlip":
+            continue
+        prof = np.loadtxt(R.DATA_DIR / f"openfoam_{label}_wall_profile.csv", delimiter=",", skiprows=2)
+        lines.append(
+            f"interFoam {label}: wall force 0-0.3 m {wall_force(prof[:, 0], prof[:, 1]):.4f} rho g H^2"
+        )
+        if fields:
+            d = next(iter(fields.values()))
+            if "box_p" in d:
+                boxes = foot_boxes_openfoam(label, r["cells_per_H"], float(d["box_w"]), d["box_y"])
+                if boxes is not None:
+                    edges = d["box_y"]
+                    lines.append(
+                        f"interFoam {label}: mean cell p* (alpha-weighted) in the same boxes, "
+                        "fields every 0.05 s: "
+                        + ", ".join(
+                            f"{edges[j] * 1000:.0f}-{edges[j + 1] * 1000:.0f}: {boxes[j]:.3f}"
+                            for j in range(len(boxes))
+                        )  # fmt: skip
+                    )
+        strip = R.DATA_DIR / f"openfoam_{label}_strip.csv"
+        if strip.is_file():
+            a = np.loadtxt(strip, delimiter=",", skiprows=2)
+            w = (a[:, 1] >= win[0]) & (a[:, 1] <= win[1])
+            lines.append(
+                f"interFoam {label}: strip depth / u / v mean over t* 3-5.5 (every 0.05 s): "
+                f"{a[w, 2].mean():.3f} / {a[w, 3].mean():.3f} / {a[w, 4].mean():.3f}"
+            )
+    return lines
 
 
 def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
@@ -133,10 +224,10 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
         if r["top"] != "open" or r["walls"] != "noSlip":
             continue
         g, fa, _ = ip.filtered(r["t_star"], r["p_star"][:, 1])
-        ax.plot(g, fa, color=f"C{2 + i}", lw=1.0, label=f"2D interFoam H/{r['cells_per_H']} (1 ms)")
+        ax.plot(g, fa, color=FOAM_COLORS[i % 3], lw=1.0, label=f"2D interFoam H/{r['cells_per_H']} (1 ms)")
     for res, d in sorted(fields.items()):
         g, fa, _ = ip.filtered(d["sensor_t_star"], d["sensor_p_star"][:, 1], tau)
-        ax.plot(g, fa, color="C3", lw=1.2, label=f"SPH H/{res} (acoustic filter {tau * 1000:.0f} ms)")
+        ax.plot(g, fa, color=SPH_COLOR, lw=1.2, label=f"SPH H/{res} (acoustic filter {tau * 1000:.0f} ms)")
     ax.set_xlim(2.0, 5.6)
     ax.set_ylim(-0.2, 2.5)
     ax.set_xlabel("t sqrt(g/H)")
@@ -149,10 +240,10 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
         if r["top"] != "open" or r["walls"] != "noSlip":
             continue
         prof = np.loadtxt(R.DATA_DIR / f"openfoam_{label}_wall_profile.csv", delimiter=",", skiprows=2)
-        ax.plot(prof[:, 1], prof[:, 0], color=f"C{2 + i}", label=f"interFoam H/{r['cells_per_H']}")
+        ax.plot(prof[:, 1], prof[:, 0], color=FOAM_COLORS[i % 3], label=f"interFoam H/{r['cells_per_H']}")
     for res, d in sorted(fields.items()):
         w = (d["t_star"] >= ip.PLATEAU[0]) & (d["t_star"] <= ip.PLATEAU[1])
-        ax.plot(d["profile"][w].mean(axis=0), d["profile_y"], color="C3", label=f"SPH H/{res} (probe)")
+        ax.plot(d["profile"][w].mean(axis=0), d["profile_y"], color=SPH_COLOR, label=f"SPH H/{res} (probe)")
     em = event_metrics(events)
     ax.plot([em[f"plateau_mean_s{k + 1}"] for k in range(4)], ip.SENSORS_Y, "ks", label="experiment, event 5")
     ax.set_ylim(0, 0.3)
@@ -171,17 +262,17 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
             with open(strip) as fh:
                 rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
             t = np.array([float(x["t_star"]) for x in rows])
-            ax.plot(t, [float(x[col]) for x in rows], "o-", ms=3, color=f"C{2 + i}",
+            ax.plot(t, [float(x[col]) for x in rows], "o-", ms=3, color=FOAM_COLORS[i % 3],
                     label=f"interFoam H/{r['cells_per_H']}" + ("" if name == "depth" else " u"))  # fmt: skip
             if name == "u":
-                ax.plot(t, [float(x["v_m_s"]) for x in rows], "s--", ms=3, color=f"C{2 + i}",
+                ax.plot(t, [float(x["v_m_s"]) for x in rows], "s--", ms=3, color=FOAM_COLORS[i % 3],
                         label=f"interFoam H/{r['cells_per_H']} v")  # fmt: skip
         for res, d in sorted(fields.items()):
             if name == "depth":
-                ax.plot(d["t_star"], d["depth"], color="C3", label=f"SPH H/{res}")
+                ax.plot(d["t_star"], d["depth"], color=SPH_COLOR, label=f"SPH H/{res}")
             else:
-                ax.plot(d["t_star"], d["u"], color="C3", label=f"SPH H/{res} u")
-                ax.plot(d["t_star"], d["v"], color="C3", ls="--", label=f"SPH H/{res} v")
+                ax.plot(d["t_star"], d["u"], color=SPH_COLOR, label=f"SPH H/{res} u")
+                ax.plot(d["t_star"], d["v"], color=SPH_COLOR, ls="--", label=f"SPH H/{res} v")
         ax.set_xlim(2.0, 5.6)
         ax.set_xlabel("t sqrt(g/H)")
         ax.set_ylabel("mean depth (m)" if name == "depth" else "mean velocity (m/s)")
@@ -220,6 +311,7 @@ def main(argv=None) -> int:
     rows.update(sph_rows(fields))
     lines = table(rows, ref)
     spread = mesh_spread(foam_rows)
+    flines = field_table(foam, fields)
     md = R.DATA_DIR / "comparison.md"
     md.write_text(
         "# Lobovsky et al. (2014) H = 0.3 m: 2D interFoam vs experiment vs SPH (sensor 2 unless named)\n\n"
@@ -228,6 +320,9 @@ def main(argv=None) -> int:
         "t* 3-5.5 after the acoustic filter 4H/c0 = 49 ms, for all sources alike); p* = p/(rho g H).\n"
         "Gradient: (mean p at sensor 2 - mean p at sensor 4) / 65 mm, in rho g (hydrostatic = 1).\n\n"
         + "\n".join(lines)
+        + "\n\nWhere SPH differs (plateau window t* 3-5.5; strip = the water within 0.1 m of the far "
+        "wall):\n\n"
+        + "\n".join(f"* {ln}" for ln in flines)
         + "\n\ninterFoam mesh spread (open top, noSlip): "
         + json.dumps(spread)
         + "\n"
@@ -251,6 +346,7 @@ def main(argv=None) -> int:
         },
     )
     print("\n".join(lines))
+    print("\n".join(flines))
     print("mesh spread:", json.dumps(spread))
     return 0
 

@@ -4,8 +4,10 @@ the comparison with the 2D interFoam reference (reference_cases/openfoam_lobovsk
 python -m verification.impact_study.fields OUT.npz RESOLUTION
 
 Every 1 ms of simulated time from t* = 1.8: the wall pressure profile (the case's probe, one point
-per height, y = 5, 15, ..., 295 mm), and over the strip within STRIP of the far wall the water area
-per unit width (sum of m / rho over STRIP: a mean depth) and the mass-weighted mean velocity.
+per height, y = 5, 15, ..., 295 mm), the mean particle pressure in boxes at the wall's foot
+(x > 1.61 m - BOX_W, y bands BOX_Y: the particles' own p, no probe), and over the strip within
+STRIP of the far wall the water area per unit width (sum of m / rho over STRIP: a mean depth) and
+the mass-weighted mean velocity.
 """
 
 import sys
@@ -16,13 +18,15 @@ import numpy as np
 from verification import impact_pressure as ip
 
 STRIP = 0.1  # m, width of the strip next to the far wall
+BOX_W = 0.02  # m, boxes at the foot of the far wall: x > 1.61 - BOX_W, y between BOX_Y edges
+BOX_Y = np.array([0.0, 0.01, 0.02, 0.04, 0.06, 0.1, 0.15])
 PROFILE_Y = np.arange(0.005, 0.3, 0.01)
 EVERY = 1.0e-3  # s
 
 
 def main():
     out, res = sys.argv[1], int(sys.argv[2])
-    rec = {"t_star": [], "profile": [], "depth": [], "u": [], "v": []}
+    rec = {"t_star": [], "profile": [], "depth": [], "u": [], "v": [], "box_p": []}
     faces = [(np.array([y]), np.array([1.0])) for y in PROFILE_Y]
     probe = ip.wall_probe
     last = [-1.0]
@@ -38,6 +42,12 @@ def main():
             rec["t_star"].append(sim.t / ip.TIME_SCALE)
             rec["profile"].append(probe(sim, faces) / (ip.RHO0 * ip.G * ip.H))
             rec["depth"].append(float((m[s] / rho[s]).sum()) / STRIP)
+            b = x[:, 0] > ip.TANK[0] - BOX_W
+            k = np.digitize(x[b, 1], BOX_Y) - 1
+            pb = ps["p"][:n][b] / (ip.RHO0 * ip.G * ip.H)
+            rec["box_p"].append(
+                [float(pb[k == j].mean()) if (k == j).any() else np.nan for j in range(len(BOX_Y) - 1)]
+            )
             ms = m[s].sum()
             rec["u"].append(float((m[s] * v[s, 0]).sum() / ms) if ms > 0 else 0.0)
             rec["v"].append(float((m[s] * v[s, 1]).sum() / ms) if ms > 0 else 0.0)
@@ -52,6 +62,8 @@ def main():
         sensor_p_star=run["p_star"],
         profile_y=PROFILE_Y,
         strip=STRIP,
+        box_w=BOX_W,
+        box_y=BOX_Y,
         cpu=time.process_time() - c0,
         wall=wall,
         status=run["status"],
