@@ -26,7 +26,7 @@ from verification import impact_pressure as ip
 
 GRADIENT_PAIR = (1, 3)  # sensors 2 and 4 (15 and 80 mm): the wall pressure gradient between them
 FOAM_COLORS = ("C2", "C1", "C4")  # interFoam meshes, coarse to fine
-SPH_COLOR = "C0"
+SPH_COLORS = ("C0", "C9")  # SPH runs (free slip, no slip)
 KEYS = ("impact_s2", "plateau_mean_s2", "plateau_sd_s2", "plateau_mean_s1", "plateau_mean_s4", "peak_s1",
         "peak_s2", "peak_s3")  # fmt: skip
 
@@ -61,7 +61,7 @@ def sph_rows(fields: dict) -> dict:
         c0 = 10.0 * np.sqrt(2.0 * ip.G * ip.H)
         run = {"t_star": d["sensor_t_star"], "p_star": d["sensor_p_star"], "status": "completed",
                "reflections": 0, "c0": c0}  # fmt: skip
-        rows[f"SPH H/{res} (fields run)"] = ip.metrics(run)
+        rows[f"SPH {res} (fields run)"] = ip.metrics(run)
     return rows
 
 
@@ -159,14 +159,13 @@ def field_table(foam: dict, fields: dict) -> list[str]:
         w = (d["t_star"] >= win[0]) & (d["t_star"] <= win[1])
         prof = d["profile"][w].mean(axis=0)
         lines.append(
-            f"SPH H/{res}: wall force 0-0.3 m (probe profile) "
-            f"{wall_force(d['profile_y'], prof):.4f} rho g H^2"
+            f"SPH {res}: wall force 0-0.3 m (probe profile) {wall_force(d['profile_y'], prof):.4f} rho g H^2"
         )
         if "box_p" in d:
             boxes = np.nanmean(d["box_p"][w], axis=0)
             edges = d["box_y"]
             lines.append(
-                f"SPH H/{res}: mean particle p* within {float(d['box_w']) * 1000:.0f} mm of the wall, "
+                f"SPH {res}: mean particle p* within {float(d['box_w']) * 1000:.0f} mm of the wall, "
                 "y bands (mm) "
                 + ", ".join(
                     f"{edges[j] * 1000:.0f}-{edges[j + 1] * 1000:.0f}: {boxes[j]:.3f}"
@@ -174,7 +173,7 @@ def field_table(foam: dict, fields: dict) -> list[str]:
                 )
             )
         for name, col in (("depth", "depth"), ("u", "u"), ("v", "v")):
-            lines.append(f"SPH H/{res}: strip {name} mean over t* 3-5.5: {d[col][w].mean():.3f}")
+            lines.append(f"SPH {res}: strip {name} mean over t* 3-5.5: {d[col][w].mean():.3f}")
     for label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
         if r["top"] != "open" or r["walls"] != "noSlip":
             continue
@@ -207,6 +206,15 @@ def field_table(foam: dict, fields: dict) -> list[str]:
     return lines
 
 
+def _style(r: dict) -> dict:
+    mesh = {20: 0, 40: 1, 60: 2, 80: 2}.get(r["cells_per_H"], 2)
+    ls = {("open", "noSlip"): "-", ("closed", "noSlip"): ":", ("open", "slip"): "--"}.get(
+        (r["top"], r["walls"]), "-."
+    )
+    name = f"interFoam H/{r['cells_per_H']}" + R.variant(r["top"], r["walls"]).replace("_", ", ")
+    return {"color": FOAM_COLORS[mesh], "ls": ls, "label": name}
+
+
 def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
     import matplotlib
 
@@ -220,14 +228,14 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
     ax.fill_between(bt, lo, hi, color="0.85", label="experiment: 2.5-97.5 % of 100 repetitions")
     te, pe = events[1]
     ax.plot(*ip.filtered(te, pe)[:2], color="0.4", lw=0.8, label="experiment, event 5 (1 ms)")
-    for i, (_label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
-        if r["top"] != "open" or r["walls"] != "noSlip":
-            continue
+    for _label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
         g, fa, _ = ip.filtered(r["t_star"], r["p_star"][:, 1])
-        ax.plot(g, fa, color=FOAM_COLORS[i % 3], lw=1.0, label=f"2D interFoam H/{r['cells_per_H']} (1 ms)")
-    for res, d in sorted(fields.items()):
+        ax.plot(g, fa, lw=1.0, **_style(r))
+    for j, (res, d) in enumerate(sorted(fields.items())):
         g, fa, _ = ip.filtered(d["sensor_t_star"], d["sensor_p_star"][:, 1], tau)
-        ax.plot(g, fa, color=SPH_COLOR, lw=1.2, label=f"SPH H/{res} (acoustic filter {tau * 1000:.0f} ms)")
+        ax.plot(
+            g, fa, color=SPH_COLORS[j % 2], lw=1.2, label=f"SPH {res} (acoustic filter {tau * 1000:.0f} ms)"
+        )
     ax.set_xlim(2.0, 5.6)
     ax.set_ylim(-0.2, 2.5)
     ax.set_xlabel("t sqrt(g/H)")
@@ -236,14 +244,14 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
     ax.set_title("sensor 2")
 
     ax = axes[0, 1]
-    for i, (label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
-        if r["top"] != "open" or r["walls"] != "noSlip":
-            continue
+    for label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
         prof = np.loadtxt(R.DATA_DIR / f"openfoam_{label}_wall_profile.csv", delimiter=",", skiprows=2)
-        ax.plot(prof[:, 1], prof[:, 0], color=FOAM_COLORS[i % 3], label=f"interFoam H/{r['cells_per_H']}")
-    for res, d in sorted(fields.items()):
+        ax.plot(prof[:, 1], prof[:, 0], **_style(r))
+    for j, (res, d) in enumerate(sorted(fields.items())):
         w = (d["t_star"] >= ip.PLATEAU[0]) & (d["t_star"] <= ip.PLATEAU[1])
-        ax.plot(d["profile"][w].mean(axis=0), d["profile_y"], color=SPH_COLOR, label=f"SPH H/{res} (probe)")
+        ax.plot(
+            d["profile"][w].mean(axis=0), d["profile_y"], color=SPH_COLORS[j % 2], label=f"SPH {res} (probe)"
+        )
     em = event_metrics(events)
     ax.plot([em[f"plateau_mean_s{k + 1}"] for k in range(4)], ip.SENSORS_Y, "ks", label="experiment, event 5")
     ax.set_ylim(0, 0.3)
@@ -253,26 +261,28 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
     ax.set_title("wall pressure profile, plateau mean")
 
     for ax, (col, name) in zip(axes[1], (("depth_m", "depth"), ("u_m_s", "u"))):
-        for i, (label, r) in enumerate(sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"])):
+        for label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
             if r["top"] != "open" or r["walls"] != "noSlip":
                 continue
+            st = _style(r)
             strip = R.DATA_DIR / f"openfoam_{label}_strip.csv"
             if not strip.is_file():
                 continue
             with open(strip) as fh:
                 rows = list(csv.DictReader(ln for ln in fh if not ln.startswith("#")))
             t = np.array([float(x["t_star"]) for x in rows])
-            ax.plot(t, [float(x[col]) for x in rows], "o-", ms=3, color=FOAM_COLORS[i % 3],
+            ax.plot(t, [float(x[col]) for x in rows], "o-", ms=3, color=st["color"],
                     label=f"interFoam H/{r['cells_per_H']}" + ("" if name == "depth" else " u"))  # fmt: skip
             if name == "u":
-                ax.plot(t, [float(x["v_m_s"]) for x in rows], "s--", ms=3, color=FOAM_COLORS[i % 3],
+                ax.plot(t, [float(x["v_m_s"]) for x in rows], "s--", ms=3, color=st["color"],
                         label=f"interFoam H/{r['cells_per_H']} v")  # fmt: skip
-        for res, d in sorted(fields.items()):
+        for j, (res, d) in enumerate(sorted(fields.items())):
+            c = SPH_COLORS[j % 2]
             if name == "depth":
-                ax.plot(d["t_star"], d["depth"], color=SPH_COLOR, label=f"SPH H/{res}")
+                ax.plot(d["t_star"], d["depth"], color=c, label=f"SPH {res}")
             else:
-                ax.plot(d["t_star"], d["u"], color=SPH_COLOR, label=f"SPH H/{res} u")
-                ax.plot(d["t_star"], d["v"], color=SPH_COLOR, ls="--", label=f"SPH H/{res} v")
+                ax.plot(d["t_star"], d["u"], color=c, label=f"SPH {res} u")
+                ax.plot(d["t_star"], d["v"], color=c, ls="--", label=f"SPH {res} v")
         ax.set_xlim(2.0, 5.6)
         ax.set_xlabel("t sqrt(g/H)")
         ax.set_ylabel("mean depth (m)" if name == "depth" else "mean velocity (m/s)")
@@ -296,7 +306,9 @@ def main(argv=None) -> int:
     fields = {}
     for item in a.sph_fields:
         res, path = item.split("=", 1)
-        fields[int(res)] = dict(np.load(path))
+        d = dict(np.load(path))
+        walls = str(d.get("walls", "free_slip"))
+        fields[f"H/{res}" + ("" if walls == "free_slip" else f", {walls} walls")] = d
     foam = ip.openfoam_reference()
     events, band, _ = ip.experiment()
     ref = ip.band_statistics(band)

@@ -1,7 +1,9 @@
 """Run the Lobovsky tank and record, besides the sensors, what the flow at the far wall looks like, for
 the comparison with the 2D interFoam reference (reference_cases/openfoam_lobovsky_impact/compare.py).
 
-python -m verification.impact_study.fields OUT.npz RESOLUTION
+python -m verification.impact_study.fields OUT.npz RESOLUTION [WALLS]
+
+WALLS: the kind of all four walls (default the case's free_slip; no_slip: the interFoam reference's).
 
 Every 1 ms of simulated time from t* = 1.8: the wall pressure profile (the case's probe, one point
 per height, y = 5, 15, ..., 295 mm), the mean particle pressure in boxes at the wall's foot
@@ -26,6 +28,15 @@ EVERY = 1.0e-3  # s
 
 def main():
     out, res = sys.argv[1], int(sys.argv[2])
+    walls = sys.argv[3] if len(sys.argv) > 3 else "free_slip"
+    if walls != "free_slip":
+        parse = ip.parse_scene
+
+        def patched(raw, where):
+            raw["walls"] = {k: walls for k in raw["walls"]}
+            return parse(raw, where)
+
+        ip.parse_scene = patched
     rec = {"t_star": [], "profile": [], "depth": [], "u": [], "v": [], "box_p": []}
     faces = [(np.array([y]), np.array([1.0])) for y in PROFILE_Y]
     probe = ip.wall_probe
@@ -67,6 +78,8 @@ def main():
         cpu=time.process_time() - c0,
         wall=wall,
         status=run["status"],
+        walls=walls,
+        reflections=run["reflections"],
         **{k: np.array(v) for k, v in rec.items()},
     )
     print(out, run["status"], f"cpu {time.process_time() - c0:.0f} s, wall {wall:.0f} s")
