@@ -283,9 +283,9 @@ def openfoam_reference():
     return out
 
 
-def openfoam_finest():
-    """The finest interFoam run of the reference set-up (open top, noSlip walls): (label, run)."""
-    runs = {k: r for k, r in openfoam_reference().items() if r["top"] == "open" and r["walls"] == "noSlip"}
+def openfoam_finest(walls="noSlip"):
+    """The finest interFoam run with open top and `walls` ("noSlip" or "slip"): (label, run)."""
+    runs = {k: r for k, r in openfoam_reference().items() if r["top"] == "open" and r["walls"] == walls}
     label = max(runs, key=lambda k: runs[k]["cells_per_H"])
     return label, runs[label]
 
@@ -543,10 +543,7 @@ def plot(sim_run, events, band, path):
 
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
     t, p = sim_run["t_star"], sim_run["p_star"]
-    try:
-        foam = openfoam_finest()
-    except (FileNotFoundError, ValueError):
-        foam = None  # the figure without the reference; the note in run() names the missing file
+    foams = [(openfoam_finest(w)[1], w, c) for w, c in (("noSlip", "C2"), ("slip", "C1"))]
     for k, ax in enumerate(axes.flat):
         te, pe = events[k]
         ge, fe, _ = filtered(te, pe)
@@ -554,9 +551,9 @@ def plot(sim_run, events, band, path):
         if k == 1:
             bt, lo, _, hi = band
             ax.fill_between(bt, lo, hi, color="0.85", label="2.5-97.5 % of the repetitions")
-        if foam is not None:
-            g, f, _ = filtered(foam[1]["t_star"], foam[1]["p_star"][:, k])
-            ax.plot(g, f, color="C2", lw=1.0, label=f"2D interFoam H/{foam[1]['cells_per_H']} (1 ms filter)")
+        for foam, walls, color in foams:
+            g, f, _ = filtered(foam["t_star"], foam["p_star"][:, k])
+            ax.plot(g, f, color=color, lw=1.0, label=f"2D interFoam H/{foam['cells_per_H']}, {walls} walls")
         if len(t) > 1:
             g, f, _ = filtered(t, p[:, k])
             ax.plot(g, f, color="C0", lw=0.6, label="SPH (face average, 1 ms filter)")
