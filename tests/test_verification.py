@@ -168,7 +168,7 @@ def test_impact_plateau_noise_at_ci_resolution(impact_ci):
     reason="known limitation of the free-slip walls: the 2D SPH plateau pressure at sensor 2 lies above the "
     "repetitions' band (mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and "
     "half-width 0.12), as 2D interFoam with the same free-slip walls does (0.93 / 0.92 at H/20 / H/40); "
-    "interFoam with no-slip walls lies inside the band (0.61 / 0.59) "
+    "interFoam with no-slip walls lies inside the band (0.61 / 0.59 / 0.58 at H/20 / H/40 / H/60) "
     "(reference_cases/openfoam_lobovsky_impact/README.md); kept visible",
 )
 def test_impact_plateau_mean_at_ci_resolution(impact_ci):
