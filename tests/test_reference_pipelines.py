@@ -106,9 +106,10 @@ def test_openfoam_lobovsky_tiny_files(tiny_lobovsky):
     assert p["profile"].read_text().splitlines()[1] == "y_m,p_star_mean,alpha_mean"
     assert p["strip"].read_text().splitlines()[1] == "t_s,t_star,depth_m,u_m_s,v_m_s"
     s = lobo.read_sensors(p["sensors"])
-    # the wall is sampled every time step, and a step is at most maxDeltaT (>= 2 kHz)
+    # the wall is sampled every time step, and a step is at most maxDeltaT (>= 2 kHz); OpenFOAM
+    # stretches a step by up to a few 1e-4 to land on the next write time (measured 0.50021 ms)
     assert np.all(np.diff(s["t_star"]) > 0)
-    assert np.max(np.diff(s["t_star"])) * lobo.TIME_SCALE <= lobo.MAX_DT * (1 + 1e-6)
+    assert np.max(np.diff(s["t_star"])) * lobo.TIME_SCALE <= lobo.MAX_DT * 1.01
     assert math.isclose(s["t_star"][-1], lobo.TINY["end_star"], rel_tol=1e-6)
 
 
