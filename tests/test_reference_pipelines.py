@@ -110,7 +110,8 @@ def test_openfoam_lobovsky_tiny_files(tiny_lobovsky):
     # stretches a step by up to a few 1e-4 to land on the next write time (measured 0.50021 ms)
     assert np.all(np.diff(s["t_star"]) > 0)
     assert np.max(np.diff(s["t_star"])) * lobo.TIME_SCALE <= lobo.MAX_DT * 1.01
-    assert math.isclose(s["t_star"][-1], lobo.TINY["end_star"], rel_tol=1e-6)
+    # to the end time (the probes are not written for the last step: within one step of it)
+    assert abs(s["t_star"][-1] - lobo.TINY["end_star"]) <= 1.01 * lobo.MAX_DT / lobo.TIME_SCALE
 
 
 def test_lobovsky_sensor_segment_weights():
