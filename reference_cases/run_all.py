@@ -1,13 +1,15 @@
 """Regenerate all full reference data (long: see reference_cases/README.md).
 
-    python -m reference_cases.run_all [--only openfoam|seepage|nappe|liggghts] [--meshes 20 40] [--nice 10]
+    python -m reference_cases.run_all [--only openfoam|seepage|nappe|impact|liggghts] [--meshes 20 40]
+                                      [--nice 10]
 
 OpenFOAM: the dam break on every mesh in --meshes (serial) and on the coarsest
 mesh with 2 ranks; the steady seepage under a sheet pile (laplacianFoam and
 porousSimpleFoam, T/10 to T/80, about 1 min); the overflow nappe of the scour set-up at
-q = 0.06 and 0.11 on its three meshes (5, 3.33, 2.5 mm, serial). LIGGGHTS: heap calibration, the
-reference collapse at the calibrated friction plus the sensitivity collapses (calibrate.py), and the
-reference collapse again on 2 ranks. The steps run one at a time; their wall
+q = 0.06 and 0.11 on its three meshes (5, 3.33, 2.5 mm, serial); the Lobovsky impact tank (H/20, H/40,
+H/60 and the closed-top and slip-wall variants at H/20 and H/40, then the comparison). LIGGGHTS: heap
+calibration, the reference collapse at the calibrated friction plus the sensitivity collapses
+(calibrate.py), and the reference collapse again on 2 ranks. The steps run one at a time; their wall
 times go to reference_cases/run_all.json.
 """
 
@@ -27,7 +29,7 @@ HERE = Path(__file__).resolve().parent
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--only", choices=["openfoam", "seepage", "nappe", "liggghts"], default=None)
+    ap.add_argument("--only", choices=["openfoam", "seepage", "nappe", "impact", "liggghts"], default=None)
     ap.add_argument(
         "--meshes",
         type=int,
@@ -70,6 +72,16 @@ def main(argv=None) -> int:
                     f"openfoam nappe q{q} dx{dx:.3g}mm",
                     lambda q=q, dx=dx: N.run_case(q, dx, keep_fields=False),
                 )
+    if a.only in (None, "impact"):
+        from reference_cases.openfoam_lobovsky_impact import compare as LC
+        from reference_cases.openfoam_lobovsky_impact import run as L
+
+        for n, top, walls in L.STUDY:
+            step(
+                f"openfoam impact h{n} {top} {walls}",
+                lambda n=n, t=top, w=walls: L.run_case(n, top=t, walls=w),
+            )
+        step("openfoam impact comparison", lambda: LC.main([]))
     if a.only in (None, "liggghts"):
         from reference_cases.liggghts_column_collapse_2d import calibrate as K
         from reference_cases.liggghts_column_collapse_2d import run as R

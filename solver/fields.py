@@ -37,6 +37,17 @@ WATER_FRACTION = FieldSpec(
     default=1.0,
 )
 
+# The seed seepage's pore water is at its true density (EOS unchanged), so it cannot reuse
+# water_fraction; this label only tells the density diffusion to leave it out (docs/seepage.md).
+PORE_LABEL = FieldSpec(
+    0,
+    np.float64,
+    "seed seepage: 1 free water, n pore water at creation (left out of the density diffusion)",
+    Mirror.SCALAR,
+    constant=True,
+    default=1.0,
+)
+
 
 def x_prev(dim: int) -> FieldSpec:
     """x at step n, kept through the drift for the midpoint continuity (numerics.leapfrog =

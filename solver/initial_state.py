@@ -91,6 +91,8 @@ def pore_water(scene: Scene, block, pts, mats, plan) -> dict:
         n = scene.materials[block.material].porosity
         rho = n * rho
         fields["water_fraction"] = np.full(len(pts), n)
+    if "pore_label" in plan.fields:  # the seed seepage's pore water (density diffusion leaves it out)
+        fields["pore_label"] = np.full(len(pts), scene.materials[block.material].porosity)
     fields["rho"] = rho
     fields["mass"] = rho * scene.scene.spacing**scene.dim
     if "fixed" in plan.fields:

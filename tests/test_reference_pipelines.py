@@ -18,6 +18,7 @@ import pytest
 from reference_cases.liggghts_column_collapse_2d import calibrate as dem_cal
 from reference_cases.liggghts_column_collapse_2d import run as dem
 from reference_cases.openfoam_dam_break_2d import run as cfd
+from reference_cases.openfoam_lobovsky_impact import run as lobo
 from reference_cases.openfoam_overflow_nappe import run as nappe
 from reference_cases.openfoam_seepage_2d import run as seep
 
@@ -88,6 +89,61 @@ def test_openfoam_tiny_two_ranks_match_serial(tiny_dam_break, tmp_path):
     assert np.max(np.abs(a["wall"] - b["wall"])) < 0.05 * dx
 
 
+# ----------------------------------------------------------------------------- OpenFOAM impact
+@pytest.fixture(scope="module")
+def tiny_lobovsky(tmp_path_factory):
+    need("blockMesh", "setFields", "interFoam", "postProcess")
+    out = tmp_path_factory.mktemp("openfoam_lobovsky_tiny")
+    return lobo.run_case(tiny=True, out=out)
+
+
+@pytest.mark.reference_tools
+def test_openfoam_lobovsky_tiny_files(tiny_lobovsky):
+    p = tiny_lobovsky["paths"]
+    lines = p["sensors"].read_text().splitlines()
+    assert lines[0].startswith("# tool=OpenFOAM v") and "H=0.3 m" in lines[0]
+    assert lines[1] == "t_s,t_star,p_star_s1,p_star_s2,p_star_s3,p_star_s4,wall_depth_m"
+    assert p["profile"].read_text().splitlines()[1] == "y_m,p_star_mean,alpha_mean"
+    assert p["strip"].read_text().splitlines()[1] == "t_s,t_star,depth_m,u_m_s,v_m_s"
+    s = lobo.read_sensors(p["sensors"])
+    # the wall is sampled every time step, and a step is at most maxDeltaT (>= 2 kHz); OpenFOAM
+    # stretches a step by up to a few 1e-4 to land on the next write time (measured 0.50021 ms)
+    assert np.all(np.diff(s["t_star"]) > 0)
+    assert np.max(np.diff(s["t_star"])) * lobo.TIME_SCALE <= lobo.MAX_DT * 1.01
+    # to the end time (the probes are not written for the last step: within one step of it)
+    assert abs(s["t_star"][-1] - lobo.TINY["end_star"]) <= 1.01 * lobo.MAX_DT / lobo.TIME_SCALE
+
+
+def test_lobovsky_sensor_segment_weights():
+    # a sensor is the overlap-weighted mean of the wall faces across its 4.2 mm segment
+    y = (np.arange(80) + 0.5) * 0.00375  # H/80 wall faces
+    for yc in lobo.SENSORS_Y:
+        w = lobo.segment_weights(y, 0.00375, yc)
+        assert math.isclose(w.sum(), 1.0) and np.all(w >= 0)
+        assert math.isclose(float(w @ y), yc, abs_tol=0.5 * 0.00375)
+        assert np.all(w[np.abs(y - yc) > 0.5 * (0.00375 + lobo.SENSOR_DIAMETER)] == 0)
+    # sensor 2 (15 mm) straddles the boundary of two H/80 faces
+    w = lobo.segment_weights(y, 0.00375, 0.015)
+    assert np.count_nonzero(w) == 2
+
+
+@pytest.mark.reference_tools
+def test_openfoam_lobovsky_tiny_physics(tiny_lobovsky):
+    s = lobo.read_sensors(tiny_lobovsky["paths"]["sensors"])
+    e = tiny_lobovsky["entry"]
+    # air only at the far wall before the surge: p* = rho_air g (0.6 m - y) / (rho_w g H) < 0.003
+    before = s["t_star"] < 2.0
+    assert np.all(np.abs(s["p_star"][before]) < 0.01)
+    assert np.all(s["wall_depth"][before] < 1e-3)
+    # the surge reaches the wall: the 2D, gate-free model arrives before the repetitions'
+    # latest impact 2.491 plus the coarse mesh's lag (H/8: 2.50 measured), after t* = 2.0
+    assert 2.0 < e["metrics"]["impact_s2"] < 2.7
+    # and runs up it
+    assert s["wall_depth"][-1] > 0.05
+    # MULES keeps the water area to solver tolerance (measured 1.8e-6 at H/8); allow 1e-4
+    assert e["water_area_max_rel_change"] < 1e-4
+
+
 # ----------------------------------------------------------------------------- OpenFOAM seepage
 @pytest.fixture(scope="module")
 def tiny_seepage(tmp_path_factory):
@@ -138,6 +194,27 @@ def test_openfoam_seepage_sheet_pile_tiny(tiny_seepage):
     field = (tiny_seepage["out"] / "head_field.csv").read_text().splitlines()
     assert field[1] == "x_m,y_m,head_m,pore_pressure_Pa"
     assert len(field) == 2 + 121 * 21  # T/20 grid over [-3T, 3T] x [0, T]
+
+
+@pytest.mark.reference_tools
+def test_openfoam_seepage_thick_pile_tiny(tmp_path, tiny_seepage):
+    """The 40 mm pile (the SPH comparison's reference, data/pile_w40mm/) at T/10: mass balance to
+    solver tolerance, the antisymmetric mean head under the pile, and less discharge than the thin
+    pile (a w-thick pile adds a channel w long under its tip: Q/(kH) ~ 1/(2 + w/(T - s)) = 0.417,
+    measured 0.393 at T/10 and 0.403 in the mesh limit, README)."""
+    need("blockMesh", "laplacianFoam", "porousSimpleFoam", "postProcess")
+    geo = seep.Geometry(pile_thickness=0.04)
+    res = seep.run_all(geo=geo, tiny=True, out=tmp_path)
+    piles = {r["solver"]: r for r in res["results"] if not r["column"]}
+    thin = {r["solver"]: r for r in tiny_seepage["results"] if not r["column"]}
+    kh = geo.k * geo.dh
+    for solver, r in piles.items():
+        assert abs(r["Q_in"] - r["Q_out"]) < 1e-6 * r["Q_in"], solver
+        q, q_thin = 0.5 * (r["Q_in"] + r["Q_out"]), 0.5 * (thin[solver]["Q_in"] + thin[solver]["Q_out"])
+        assert 0.37 < q / kh < 0.41 and q < 0.9 * q_thin, (solver, q / kh)
+        mid = r["field"].at(np.zeros(5), np.linspace(0.0, geo.thickness - geo.penetration, 5))
+        assert np.allclose(mid, 0.5 * (geo.h_up + geo.h_down), atol=1e-6 * geo.dh), solver
+    assert piles["laplace"]["label"] == "pile_w40mm_laplace_T10"
 
 
 def test_sheet_pile_closed_form():

@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import pytest
 from report_run import EXPECTED_CHECKS, shared_report_run
 
 from verification.nightly import collect, history, plots
 from verification.nightly.report import problems_of
+
+ROOT_TESTS = Path(__file__).resolve().parent
 
 
 @pytest.fixture(scope="module")
@@ -128,3 +131,31 @@ def test_a_killed_case_says_how():
         -signal.SIGXCPU
     )
     assert collect._ended(3) == "process exited with status 3"
+
+
+def test_cases_side_by_side_keep_their_own_cpu_time(tmp_path, monkeypatch):
+    """Two busy cases run at once (jobs=2). Each one's CPU time must be its own (wait4 of that
+    child), not the sum over the children that ended meanwhile (RUSAGE_CHILDREN differences):
+    busy minus idle is BUSY_CPU_S, which a double count would make about twice that."""
+    from report_busy import BUSY_CPU_S
+
+    monkeypatch.setenv("PYTHONPATH", str(ROOT_TESTS))
+    cases = {"idle": "report_busy:Idle", "busy_a": "report_busy:Busy", "busy_b": "report_busy:Busy"}
+    started = []
+    records = collect.run_all(
+        cases, tmp_path, timeout=600, jobs=2, progress=started.append, cost={"idle": 0.0, "busy_a": 2.0}
+    )
+    assert list(records) == list(cases)  # the order of the registry, whatever ran first
+    assert [m for m in started if m.endswith("...")][0].startswith("report: busy_b")  # unknown cost: first
+    assert all(r["status"] == "passed" for r in records.values()), records
+    idle = records["idle"]["process"]["cpu_s"]
+    for name in ("busy_a", "busy_b"):
+        extra = records[name]["process"]["cpu_s"] - idle
+        assert 0.9 * BUSY_CPU_S < extra < 1.5 * BUSY_CPU_S, (name, extra)
+
+
+def test_a_hung_case_is_killed_at_its_timeout(tmp_path, monkeypatch):
+    monkeypatch.setenv("PYTHONPATH", str(ROOT_TESTS))
+    rec = collect.run_case("hang", "report_busy:Hang", tmp_path / "hang", timeout=5.0)
+    assert rec["status"] == "crashed" and "timed out after 5 s" in rec["crash"]
+    assert rec["process"]["wall_s"] < 60

@@ -136,15 +136,17 @@ def impact_ci(tmp_path_factory):
 
 
 PLATEAU_MEAN = impact_pressure.PLATEAU_MEAN
+PLATEAU_MEAN_2D = impact_pressure.PLATEAU_MEAN_2D
 PLATEAU_NOISE = "plateau noise: sd of the acoustically filtered p* at sensor 2, t* 3-5.5"
 
 
 @pytest.mark.slow
 def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
     """No blow-up, zero wall reflections, impact time inside the experiment's window (the plateau
-    mean is a known discrepancy, pinned by a strict xfail)."""
+    mean is a known discrepancy against the experiment and the 2D interFoam reference alike, pinned by
+    strict xfails)."""
     assert impact_ci.figure.is_file()
-    known = (PLATEAU_MEAN,)
+    known = (PLATEAU_MEAN, PLATEAU_MEAN_2D)
     failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric not in known]
     assert not failed, "\n".join(failed)
 
@@ -163,13 +165,27 @@ def test_impact_plateau_noise_at_ci_resolution(impact_ci):
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="known discrepancy: the 2D SPH plateau pressure at sensor 2 lies above the repetitions' band "
-    "(mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and half-width 0.12) "
-    "and moves away from it with refinement; not noise and not the probe (verification/results/"
-    "impact_pressure/README.md); kept visible",
+    reason="known limitation of the free-slip walls: the 2D SPH plateau pressure at sensor 2 lies above the "
+    "repetitions' band (mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and "
+    "half-width 0.12), as 2D interFoam with the same free-slip walls does "
+    "(0.93 / 0.92 / 0.93 at H/20 / H/40 / H/60); "
+    "interFoam with no-slip walls lies inside the band (0.61 / 0.59 / 0.58 at H/20 / H/40 / H/60) "
+    "(reference_cases/openfoam_lobovsky_impact/README.md); kept visible",
 )
 def test_impact_plateau_mean_at_ci_resolution(impact_ci):
     check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)
+    assert check.passed, check.line()
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="SPH converges toward 2D interFoam with the same free-slip walls (0.925 at H/60) from below, "
+    "-0.11 / -0.07 / -0.03 at H/20 / H/40 / H/80: at H/20 more than the case's first-order allowance 0.063 "
+    "plus interFoam's mesh uncertainty (reference_cases/openfoam_lobovsky_impact/README.md)",
+)
+def test_impact_plateau_mean_against_2d_interfoam(impact_ci):
+    check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN_2D)
     assert check.passed, check.line()
 
 

@@ -26,6 +26,7 @@ CASES = {
     "seepage_darcy": "verification.seepage_darcy",
     "seepage_terzaghi": "verification.seepage_terzaghi",
     "seepage_critical_gradient": "verification.seepage_critical_gradient",
+    "seepage_sheet_pile": "verification.seepage_sheet_pile",
     "overflow_nappe_rigid_bed": "verification.overflow_nappe_rigid_bed",  # issue 11 item 8, vs OpenFOAM
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out

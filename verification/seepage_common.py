@@ -41,8 +41,9 @@ def buoyant_unit_weight(mat):
 
 
 def scene(
-    name, spacing, end_time, domain_max, materials, blocks, formulation="mixture", walls=None, **numerics
-):
+    name, spacing, end_time, domain_max, materials, blocks, formulation="mixture", walls=None, bodies=None,
+    **numerics,
+):  # fmt: skip
     raw = {
         "scene": {
             "name": name,
@@ -58,6 +59,8 @@ def scene(
         "numerics": {"seepage": formulation, **numerics},
         "output": {"interval": end_time, "vtk": False, "render": False},
     }
+    if bodies:
+        raw["bodies"] = bodies
     return parse_scene(raw, f"<verification {name}>")
 
 

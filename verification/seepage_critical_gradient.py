@@ -28,12 +28,16 @@ its geostatic value gamma' z (`stress_ratio`, window mean); heave when it is bel
 (within 10 % of i_c on Terzaghi's line 1 - i / i_c, the issue's tolerance). The rise of the top row
 is reported too (`rise_dx`; `rise_heave` when above HEAVE_DX = 0.1 dx): above i_c a free sample
 should rise until the left leg has fallen to the critical head, at most n (i - i_c) L W_L / W_R
-(0.2 dx at 1.05 i_c), but at dx = 5 mm no run rose by 0.1 dx up to 1.29 i_c (docs/seepage.md).
+(0.2 dx at 1.05 i_c); at dx = 5 mm a run at 1.29 i_c heaves at 0.1 dx/s, so it reaches only 0.08 dx
+in the 0.4 s run, while one at 1.135 i_c rises 0.014 dx and stops (docs/seepage.md, case 4).
 The measured i is below the aimed one (0.87 of it at 5 mm, 0.94 at 2.5 mm): the left leg's head
 is ~1.5 dx below its lattice water table (SPH free-surface truncation). The same truncation at
 the sample's outflow surface leaves the top rows carrying ~1.9 dx of buoyant overburden, an
 offset of the stress ratio that halves with dx (0.3 at 5 mm, ~0.1 at 2.5 mm): the check is made
-at 2.5 mm (DEFAULT_RESOLUTION), where the bracket is [0.914, 1.034] i_c.
+at 2.5 mm (DEFAULT_RESOLUTION), where the bracket is [0.914, 1.034] i_c. (At 5 mm the top row's
+pore water reads a head above the second row's, a reversed gradient, so the top row is a lid of
+about gamma' dx; the 5 mm sample is stable at 1.135 i_c and heaves at 1.286 i_c. The measured i
+moves in lattice steps of dx / L = 0.083 i_c there, so the bracket cannot be refined by the aim.)
 
 Reference: i_c = gamma' / gamma_w = (1 - n)(G_s - 1) = 0.99 (n = 0.4, G_s = 2.65). Check
 (issue): the onset, bracketed by the largest gradient without heave and the smallest with heave,

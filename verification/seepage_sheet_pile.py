@@ -1,60 +1,129 @@
 """SPH side of the sheet-pile seepage cross-check against OpenFOAM (issue 10, item 5;
-docs/verification_seepage.md case 5). The reference is reference_cases/openfoam_seepage_2d
-(data/: discharge, heads along lines, the head field of its finest Laplace mesh).
+docs/verification_seepage.md case 5, docs/seepage.md "Against OpenFOAM").
 
-Geometry as the reference, shifted so that the domain starts at x = 0: a fixed, saturated sand
-layer T = 0.2 m thick on the impermeable floor, x in [0, 2 HALF + dx] (closed, free-slip sides),
-a sheet pile centred at XP = HALF + dx/2 (the reference's x = 0) from the ground surface down to
-T - S, and free water above the ground, 0.10 m deep upstream (head H_UP above the base) and
-0.05 m downstream (head H_DOWN). The pile is a fixed block of water particles 3 dx thick from
-T - S to above the upstream water (the reference pile has zero thickness). 3 dx, not 2: the
-water on one side must not reach the pile particles of the other side's face (2 dx apart with a
-2 dx pile, inside 2h = 2.6 dx), whose pressure is the other side's; the half-cell shift keeps
-the lattice aligned with a pile of odd thickness.
+The reference is reference_cases/openfoam_seepage_2d run with a pile W = 40 mm thick
+(`python -m reference_cases.openfoam_seepage_2d.run --pile-thickness 0.04`, data/pile_w40mm/):
+Laplace's equation for the head on T/10-T/80 meshes, Q/(kH) = 0.40303 by Richardson
+extrapolation (observed order 1.3, GCI 0.19 %), and heads along two lines. Why a thick pile:
+OpenFOAM's pile is a zero-thickness baffle; SPH needs fixed particles at least 3 dx thick (the
+water on one side must not reach the far face's particles, whose pressure is the other side's:
+inside 2h = 2.6 dx a 2 dx pile leaks, Q/Q_ref 0.75), and a pile of w adds a channel w long under
+its tip in series with the thin pile's flow net: Q/(kH) ~ 1/(2 + w/(T - S)), 0.43 for 3 cm (the
+first runs measured 0.43 against the thin pile's 0.50 and took it for an SPH error). With the
+same 40 mm pile in both codes (4 dx at 10 mm, 8 dx at 5 mm) the comparison is like for like.
 
-Formulation: "seed" only. Free water flows into the pores here, which the mixture form cannot do
-yet (its pore water keeps n rho_w as its EOS reference, so water entering from a pond reads a
-spurious tension: seepage_darcy.py, "Why a draining column"); the seed form's water is at its true
-density everywhere, and its steady state is Laplace's equation for the head (docs/seepage.md:
-n v_w = -k grad h with div v_w = 0), the reference's equation. In the seed form the water particles
-move at the pore velocity v_w and tile the whole bed, so the discharge is Q = n int v_w . dA.
+Geometry as the reference, shifted so the domain starts at x = 0: a fixed, saturated sand layer
+T = 0.2 m thick on the impermeable floor, x in [0, 2 HALF] (free-slip sides), the pile centred at
+XP = HALF from T - S up to above the upstream water, and water on the ground, 0.10 m deep
+upstream (head H_UP above the base) and 0.05 m downstream (H_DOWN).
 
-Start: the pore water at the reference head, p = gamma_w (h_ref(x, y) - y), rho = rho_w(p) and
-m = rho dx^2 (the lattice), so that the run starts near its steady state; the ponds hydrostatic.
+Formulation: "seed". The ponds are free water that flows into the pores; the seed form's water
+is at its true density everywhere, and its steady state is Laplace's equation for the head
+(docs/seepage.md: n v_w = -k grad h with div v_w = 0), the reference's equation. The mixture form
+is not compared: its pore water keeps n rho_w as its equation-of-state reference, so free water
+entering the pores reads a spurious tension (seepage_darcy.py, "Why a draining column"). A
+first try with the ponds as fixed, saturated gravel (same n, k_pond = 100 k) ran at 10 mm but its
+pond heads sat 10 and 7 mm low and Q/(k dH) oscillated between 0.38 and 0.62 (docs/seepage.md).
+
+Numerics: the defaults (delta-SPH density diffusion on rho - rho^H), with the seed's pore water
+out of the diffusion (solver/physics/density_diffusion.py, `pore_label`): in a seepage flow the
+pressure is not hydrostatic, so the diffusion moves mass without moving particles, an extra
+conductivity k_delta ~ delta h g / c = 6.4e-4 m/s at dx = 10 mm, the order of k = 1e-3 (the first
+runs, with it: Q 0.72 of the thin-pile reference, 0.90 of the thick one). The ponds keep it: with
+no diffusion at all the ponds' pressure noise grows and their heads swing by +-1 cm after 0.5 s
+at 5 mm.
+
+The pile: fixed water particles (a `[[bodies]]` polygon, image particles, was tried: its corner
+images near the fixed skeleton gave head errors of order H along the face). A fixed-particle wall
+holds the pressure its density gives it, so the case sets it after every step from the water on
+its own side (PileWallPressure: Adami et al. 2012's extrapolation), and leaves the pile's
+particles out of the density diffusion too (pore_label = n), which would otherwise carry the
+upstream pressure through the pile.
+
+Q is not steady: it falls by ~3 % of the reference per 0.5 s at 10 and 5 mm, as the Lagrangian pore
+water, moving through the fixed skeleton by k i t / n, loses its lattice order near the pile tip
+(HeldPoreWater, a diagnostic, holds it on the lattice: Q is then steady, +4.9 % / +3.8 % at
+10 / 5 mm). The checks are made on the Lagrangian runs, the solver as it is.
+
+Start: the pore water at the reference head, p = gamma_w (h_ref(x, y) - y), rho = rho_w(p),
+m = rho dx^2; the ponds hydrostatic. This starts the run near the steady state; what remains is
+SPH's own approach to its steady state (a slow drift of Q, see docs/seepage.md).
 
 Observables (averaged over the last half of the run):
-  * Q = n <v_x> (T - S) of the pore water in the particle column at x = XP below the pile tip
-    (the section under the pile);
-  * heads h = y + p / gamma_w of the pore water along the row nearest the floor and the column
-    nearest x = XP + T/10 (the reference's "base" and "downstream_x_T_over_10" lines), against
-    the reference head field at the particles' positions, as max |h - h_ref| / H (H = H_UP -
-    H_DOWN).
+  * Q = n <v_x> (T - S) of the pore water under the pile (|x - XP| < W/2, y < T - S);
+  * the heads the ponds impose (first water row above the ground, >= 0.1 m from the pile), and
+    Q / (k dH) with dH their difference: the problem is linear in H, so this takes the SPH free
+    surface's head deficit (~dx/2 of head at the ponds' top) out of the comparison of the seepage;
+  * heads h = y + p / gamma_w along the row nearest the floor and the column nearest
+    x = XP + W/2 + T/10 (the reference's "base" and "downstream_x_T_over_10" lines), normalised
+    by the SPH pond heads, against the reference's: max |(h - h_down)/dH - (h_ref - H_DOWN)/H|.
+
+Tolerances: TOLERANCES below, with their source.
 """
 
 from __future__ import annotations
 
+import json
+import os
 from pathlib import Path
 
 import numpy as np
 
 from . import seepage_common as sc
+from .common import RESULTS, CaseResult, Check, machine_load, reference_case_dir, save_figure, save_study
 
 T, S = 0.2, 0.1  # layer thickness, pile depth below the ground (m)
+W = 0.04  # pile thickness (m), the same in the reference
 HALF = 0.6  # half the layer length (m)
 H_UP, H_DOWN = 0.30, 0.25  # heads above the base (m)
 K, POROSITY = 1e-3, 0.4
+K_POND = 100 * K  # the mixture's gravel ponds
 E_FIXED = 1.0e5  # the fixed skeleton's stiffness plays no part (as seepage_darcy.py)
-Q_REFERENCE = 0.5 * K * (H_UP - H_DOWN)  # Q/(kH) = 1/2 (Harr 1962), the reference's mesh limit to 7e-5
-DATA = Path(__file__).resolve().parents[1] / "reference_cases" / "openfoam_seepage_2d" / "data"
+DIFFUSION = "fourtakas"  # the default; pore water left out (see the module docstring)
+PILE = "particles"  # "body" (image particles) or "particles" (fixed water): see the module docstring
+T_END = 1.0  # s: Q is steady from 0.2 s (the pore water's storage time (2T)^2 / c_v ~ 0.02 s)
+DEFAULT_RESOLUTION = 20  # dx = T / 20 = 10 mm
+STUDY_RESOLUTIONS = (20, 40)  # 10 and 5 mm (the pile 4 and 8 dx thick)
+QUICK_RESOLUTION = 20
+OUT = RESULTS / "seepage_sheet_pile"
+# Tolerances, each with its source (docs/seepage.md, "Against OpenFOAM"):
+#  * Q: issue 10's 2 % for a steady Darcy discharge (item 4, "q = k i within 2 %": the same physics),
+#    plus the reference's GCI (0.19 %); the same 2 % bounds Q's change across the averaging window
+#    (the reference is steady, so a comparison whose result moves by more than its tolerance within
+#    the window is not a comparison of steady states);
+#  * heads (normalised by dH): h / T, the support truncation at the floor and the ground over the
+#    layer (the error analysis of seepage_bed_at_rest.py: h/D on its profiles): 0.065 at 10 mm.
+Q_TOLERANCE = 0.02
+Q_SOURCE = "issue 10's 2 % for a steady Darcy discharge, plus the reference's GCI"
+# The CI sample (10 mm, 0.3 s, means over 0.15-0.3 s): the 10 mm discretisation error measured with
+# the pore water held on the lattice (Q/(k dH) 0.4227, +4.9 %, results/.../held_pore_water.md: the
+# error without the disorder) plus what the disorder moves Q by over that run at 10 mm (0.4195 at
+# 0.05 s to 0.4156 at 0.3 s: 1.0 %); the reference's GCI is added in the test.
+CI_Q_TOLERANCE = (0.4227 - 0.40303) / 0.40303 + (0.4195 - 0.4156) / 0.40303
+# Documented shortfalls at the default resolution (docs/seepage.md): shown as known by the nightly.
+KNOWN_FAILURES = {
+    "seed: line x = w/2 + T/10, max normalised head error": "0.076 at 10 mm against h/T = 0.065 "
+    "(the row-to-row alternation of the pore pressure next to the pile; 0.033 at 5 mm). Also open, "
+    "though it passes at 10 mm over 0.5-1 s (-1.9 %): Q/(k dH) falls steadily, 3 % of the reference "
+    "per 0.5 s at 5 mm, to 0.380 at 3 s at 10 mm, because the Lagrangian pore water loses its lattice "
+    "order near the pile tip (with it held on the lattice Q is steady, +4.9 % / +3.8 % at 10 / 5 mm; "
+    "docs/seepage.md, case 5)",
+}
+NIGHTLY_NOTE = "10 mm (default) and the 10/5 mm resolution study, 1 s each (5 mm: ~230 s CPU)"
+REFERENCE = reference_case_dir("openfoam_seepage_2d") / "data" / "pile_w40mm"
+Q_REF_SOURCE = "OpenFOAM laplacianFoam, pile 40 mm, Richardson limit of T/20-T/40-T/80 (manifest.json)"
 
 
-def pile_centre(dx):
-    return HALF + 0.5 * dx
+def reference_discharge():
+    """(Q/(kH) of the reference, its relative uncertainty): the Richardson limit of the Laplace
+    meshes and Roache's GCI on the finest (manifest.json, mesh_study)."""
+    study = json.loads((REFERENCE / "manifest.json").read_text())["mesh_study"]["richardson"]
+    return study["extrapolated_Q_over_kH"], study["gci_fine_rel"]
 
 
 def reference_head():
-    """h_ref(x, y) with x in the reference's frame (pile at 0): bilinear in its head_field.csv."""
-    rows = np.loadtxt(DATA / "head_field.csv", delimiter=",", comments="#", skiprows=2)
+    """h_ref(x, y) with x in the reference's frame (pile centred at 0): bilinear in head_field.csv."""
+    rows = np.loadtxt(REFERENCE / "head_field.csv", delimiter=",", comments="#", skiprows=2)
     xs, ys = np.unique(rows[:, 0]), np.unique(rows[:, 1])
     grid = np.full((len(ys), len(xs)), np.nan)
     grid[np.searchsorted(ys, rows[:, 1]), np.searchsorted(xs, rows[:, 0])] = rows[:, 2]
@@ -71,10 +140,20 @@ def reference_head():
     return at
 
 
-def scene(resolution, t_end, formulation="seed"):
+def reference_line(line):
+    """(x in the reference's frame, y, head) of the T/80 Laplace run along one head line."""
+    import csv
+
+    with open(REFERENCE / "head_lines.csv") as fh:
+        rows = [r for r in csv.reader(fh) if not r[0].startswith("#")][1:]
+    sel = [r for r in rows if r[0] == "laplace" and r[1] == "80" and r[2] == line]
+    return tuple(np.array([float(r[i]) for r in sel]) for i in (3, 4, 5))
+
+
+def scene(resolution, t_end=T_END, formulation="seed", diffusion=DIFFUSION, pile=PILE):
     dx = T / resolution
-    p0, p1 = pile_centre(dx) - 1.5 * dx, pile_centre(dx) + 1.5 * dx  # the pile
-    right = 2 * HALF + dx
+    p0, p1 = HALF - 0.5 * W, HALF + 0.5 * W  # the pile
+    right = 2 * HALF
     top = H_UP + 0.02
     soil = {"shape": "rectangle", "fixed": True, "saturated": True, "material": "sand", "pore_water": "water"}
     blocks = [
@@ -82,42 +161,143 @@ def scene(resolution, t_end, formulation="seed"):
         {**soil, "name": "lower_down", "min": [HALF, 0.0], "max": [right, T - S], "water_table": H_DOWN},
         {**soil, "name": "upper_up", "min": [0.0, T - S], "max": [p0, T], "water_table": H_UP},
         {**soil, "name": "upper_down", "min": [p1, T - S], "max": [right, T], "water_table": H_DOWN},
-        {"name": "pile", "material": "pile", "shape": "rectangle", "fixed": True, "min": [p0, T - S],
-         "max": [p1, top]},
-        {"name": "pond_up", "material": "water", "shape": "rectangle", "min": [0.0, T], "max": [p0, H_UP],
-         "hydrostatic": True},
-        {"name": "pond_down", "material": "water", "shape": "rectangle", "min": [p1, T],
-         "max": [right, H_DOWN], "hydrostatic": True},
-    ]  # fmt: skip
-    mats = {
-        "water": sc.WATER,
-        "pile": sc.WATER,
-        "sand": sc.sand(POROSITY, permeability=K, youngs_modulus=E_FIXED),
-    }
+    ]
+    mats = {"water": sc.WATER, "sand": sc.sand(POROSITY, permeability=K, youngs_modulus=E_FIXED)}
+    bodies = None
+    if pile == "body":  # a rigid body: image particles across its faces (solver/physics/bodies.py)
+        bodies = [{"name": "pile", "vertices": [[p0, T - S], [p1, T - S], [p1, top], [p0, top]]}]
+    else:  # fixed water particles
+        blocks.append({"name": "pile", "material": "pile", "shape": "rectangle", "fixed": True,
+                       "min": [p0, T - S], "max": [p1, top]})  # fmt: skip
+        mats["pile"] = sc.WATER
+    if formulation == "seed":
+        blocks += [
+            {"name": "pond_up", "material": "water", "shape": "rectangle", "min": [0.0, T], "max": [p0, H_UP],
+             "hydrostatic": True},
+            {"name": "pond_down", "material": "water", "shape": "rectangle", "min": [p1, T],
+             "max": [right, H_DOWN], "hydrostatic": True},
+        ]  # fmt: skip
+    else:
+        mats["gravel"] = sc.sand(POROSITY, permeability=K_POND, youngs_modulus=E_FIXED)
+        pond = {**soil, "material": "gravel"}
+        blocks += [
+            {**pond, "name": "pond_up", "min": [0.0, T], "max": [p0, H_UP], "water_table": H_UP},
+            {**pond, "name": "pond_down", "min": [p1, T], "max": [right, H_DOWN], "water_table": H_DOWN},
+        ]
     walls = {"x_min": "free_slip", "x_max": "free_slip", "y_min": "free_slip"}
-    return sc.scene("seepage_sheet_pile", dx, t_end, [right, top + 0.02], mats, blocks, formulation, walls)
+    return sc.scene(
+        "seepage_sheet_pile", dx, t_end, [right, top + 0.02], mats, blocks, formulation, walls, bodies,
+        density_diffusion=diffusion,
+    )  # fmt: skip
 
 
-def start_at_reference(sim):
-    """Pore water (free water below the ground) at the reference head: p, rho_w(p), m = rho dx^2."""
+def start_at_reference(sim, formulation):
+    """Pore water (water below the ground) at the reference head: p, rho_w(p) (times n for the
+    mixture's pore water), m = rho dx^2."""
     from solver.materials import tait_density
 
     ps, mats = sim.particles, sim.plan.materials
+    dx = sim.scene.scene.spacing
     wa = sc.water_rows(sim)
     wa = wa[~ps["fixed"][wa]]
-    x = ps["x"][wa]
-    pore = wa[x[:, 1] < T]
+    pore = wa[ps["x"][wa, 1] < T]
     h_ref = reference_head()
-    xp = pile_centre(sim.scene.scene.spacing)
-    p = np.maximum(sc.GAMMA_W * (h_ref(ps["x"][pore, 0] - xp, ps["x"][pore, 1]) - ps["x"][pore, 1]), 0.0)
+    x, y = ps["x"][pore, 0] - HALF, ps["x"][pore, 1]
+    p = np.maximum(sc.GAMMA_W * (h_ref(x, y) - y), 0.0)
     kw = mats.names.index("water")
     rho = tait_density(p, mats.rho0[kw], mats.eos_b[kw], mats.eos_exponent[kw])
+    if formulation == "mixture":
+        rho = POROSITY * rho
+    if "pore_label" in ps:  # the pile's fixed water out of the density diffusion (module docstring)
+        fixed = sc.water_rows(sim)
+        ps["pore_label"][fixed[ps["fixed"][fixed]]] = POROSITY
     ps["p"][pore] = p
     ps["rho"][pore] = rho
-    ps["mass"][pore] = rho * sim.scene.scene.spacing**2
-    for half in ("rho_half",):
-        if half in ps:
-            ps[half][pore] = rho
+    ps["mass"][pore] = rho * dx**2
+    if "rho_half" in ps:
+        ps["rho_half"][pore] = rho
+
+
+class PileWallPressure:
+    """The pile's fixed water particles get, after every step, the pressure of the water on their
+    own side of the pile extrapolated to them (Adami, Hu & Adams 2012, J. Comput. Phys. 231:7057,
+    eq. 27, without the wall's acceleration): p_w = sum_f (p_f + rho_f g (y_f - y_w)) W_wf / sum_f W_wf,
+    and rho = rho_w(p_w) (Tait inverse). Why: a fixed-particle wall holds whatever pressure its
+    density gives it. With the density diffusion the pile's particles diffuse pressure from one side
+    to the other (a leak: Q -10 %); without it they stay at their start pressure (0: the pore water
+    next to the faces is pulled into the pile, its head 0.1-0.2 H low along x = w/2 + T/10). Each
+    side's particles see only that side's water, so no pressure crosses the pile. The skeleton is
+    fixed and the pore water moves by < 0.1 mm over a run, so the pairs and weights are found once
+    (by particle id: rows are re-sorted at rebuilds). Serial runs only (owned rows)."""
+
+    def __init__(self, sim):
+        from solver.kernels import cubic_spline_normalisation, cubic_spline_w
+        from solver.materials import tait_density
+
+        ps, mats = sim.particles, sim.plan.materials
+        n = ps.n_owned
+        water = sc.water_rows(sim)
+        wall = water[ps["fixed"][water]]
+        free = water[~ps["fixed"][water]]
+        h = sim.h
+        norm = cubic_spline_normalisation(2, h)
+        xw, xf = ps["x"][wall], ps["x"][free]
+        side_w, side_f = np.sign(xw[:, 0] - HALF), np.sign(xf[:, 0] - HALF)
+        rows, cols, weights = [], [], []
+        for a in range(len(wall)):
+            d = np.hypot(*(xf - xw[a]).T)
+            near = np.flatnonzero((d < 2.0 * h) & (side_f == side_w[a]))
+            rows += [a] * len(near)
+            cols += near.tolist()
+            weights += [cubic_spline_w(r, h, norm) for r in d[near]]
+        self.pair_wall, self.pair_free = np.array(rows, int), np.array(cols, int)
+        self.weight = np.array(weights)
+        self.wall_id, self.free_id = ps["id"][wall].copy(), ps["id"][free].copy()
+        self.y_wall = xw[:, 1].copy()
+        self.sum_w = np.bincount(self.pair_wall, self.weight, len(wall))
+        self.inverse = np.empty(int(ps["id"][:n].max()) + 1, int)
+        k = mats.names.index("pile")
+        self.eos = (mats.rho0[k], mats.eos_b[k], mats.eos_exponent[k])
+        self.tait_density = tait_density
+        self(sim)
+
+    def __call__(self, sim):
+        ps = sim.particles
+        n = ps.n_owned
+        self.inverse[ps["id"][:n]] = np.arange(n)
+        wall, free = self.inverse[self.wall_id], self.inverse[self.free_id]
+        f = free[self.pair_free]
+        value = ps["p"][f] + ps["rho"][f] * sc.G * (ps["x"][f, 1] - self.y_wall[self.pair_wall])
+        p = np.zeros(len(wall))
+        has = self.sum_w > 0
+        p[has] = np.bincount(self.pair_wall, self.weight * value, len(wall))[has] / self.sum_w[has]
+        p = np.maximum(p, 0.0)
+        rho = self.tait_density(p, *self.eos)
+        ps["p"][wall], ps["rho"][wall] = p, rho
+        if "rho_half" in ps:
+            ps["rho_half"][wall] = rho
+
+
+class HeldPoreWater:
+    """Diagnostic (not the solver's physics): the pore water put back at its start positions after
+    every step, so it keeps the skeleton's lattice (an Eulerian pore water). The Lagrangian pore
+    water moves relative to the fixed skeleton by k i t / n (about 0.5 dx per second next to the
+    pile tip); with it held, Q/(k dH) stops falling (docs/seepage.md, case 5)."""
+
+    def __init__(self, sim):
+        ps = sim.particles
+        n = ps.n_owned
+        water = sc.water_rows(sim)
+        water = water[~ps["fixed"][water]]
+        pore = water[ps["x"][water, 1] < T]
+        self.ids, self.x0 = ps["id"][pore].copy(), ps["x"][pore].copy()
+        self.inverse = np.empty(int(ps["id"][:n].max()) + 1, int)
+
+    def __call__(self, sim):
+        ps = sim.particles
+        n = ps.n_owned
+        self.inverse[ps["id"][:n]] = np.arange(n)
+        ps["x"][self.inverse[self.ids]] = self.x0
 
 
 def measure(sim):
@@ -125,64 +305,178 @@ def measure(sim):
     dx, h_ref = sim.scene.scene.spacing, reference_head()
     wa = sc.water_rows(sim)
     wa = wa[~ps["fixed"][wa]]
-    xp = pile_centre(dx)
-    x, y = ps["x"][wa, 0] - xp, ps["x"][wa, 1]  # x in the reference's frame
-    under = (np.abs(x) < 0.5 * dx) & (y < T - S)
+    x, y = ps["x"][wa, 0] - HALF, ps["x"][wa, 1]  # x in the reference's frame
+    under = (np.abs(x) < 0.5 * W) & (y < T - S)
     q = POROSITY * float(ps["v"][wa][under, 0].mean()) * (T - S)
     head = y + ps["p"][wa] / sc.GAMMA_W
-    err = head - h_ref(x, y)
+    # the heads the ponds impose: the first water row above the ground, away from the pile
+    row = (y > T) & (y < T + dx) & (np.abs(x) > 0.1)
+    h_up, h_down = float(head[row & (x < 0)].mean()), float(head[row & (x > 0)].mean())
+    out = {"Q": q, "h_up": h_up, "h_down": h_down, "Q_over_kdH": q / (K * (h_up - h_down))}
     lines = {
         "base": y < dx,
-        "downstream_x_T_over_10": (np.abs(x - T / 10) < 0.5 * dx) & (y < T - dx),
+        "downstream_x_T_over_10": (np.abs(x - (0.5 * W + T / 10)) < 0.5 * dx) & (y < T),
     }
-    out = {"Q": q}
-    for name, sel in lines.items():
-        out[name] = float(np.abs(err[sel]).max() / (H_UP - H_DOWN))
-    # the heads the ponds actually impose (SPH's free-surface pressure deficit is ~dx/2 of head):
-    # the row of pond water just above the ground, away from the pile
-    row = (y > T) & (y < T + dx) & (np.abs(x) > 0.1)
-    up, down = row & (x < 0), row & (x > 0)
-    h_up, h_down = float(head[up].mean()), float(head[down].mean())
-    out.update(h_up=h_up, h_down=h_down, Q_over_kdH=q / (K * (h_up - h_down)))
-    # heads normalised by the imposed drop, against the reference's
     ref_norm = (h_ref(x, y) - H_DOWN) / (H_UP - H_DOWN)
     norm_err = (head - h_down) / (h_up - h_down) - ref_norm
     for name, sel in lines.items():
-        out[name + "_normalised"] = float(np.abs(norm_err[sel]).max())
+        out[name] = float(np.abs(norm_err[sel]).max())
+        order = np.argsort(x[sel] if name == "base" else y[sel])
+        norm = (head[sel] - h_down) / (h_up - h_down)
+        out[name + "_profile"] = (x[sel][order], y[sel][order], norm[order])
     return out
 
 
-def run_one(resolution=10, t_end=0.3, formulation="seed", samples=7):
+def run_one(
+    resolution=DEFAULT_RESOLUTION, t_end=T_END, formulation="seed", diffusion=DIFFUSION, samples=21,
+    pile=PILE, wall_pressure=True, held_pore_water=False,
+):  # fmt: skip
     from solver.simulation import Simulation
 
-    sim = Simulation(scene(resolution, t_end, formulation))
-    start_at_reference(sim)
+    sim = Simulation(scene(resolution, t_end, formulation, diffusion, pile))
+    start_at_reference(sim, formulation)
+    hooks = [PileWallPressure(sim)] if pile == "particles" and wall_pressure else []
+    if held_pore_water:
+        hooks.append(HeldPoreWater(sim))
     times = np.linspace(0.0, t_end, samples)
-    obs, wall, cpu = sc.run_timed(sim, times, measure)
+    obs, wall, cpu = sc.run_timed(sim, times, measure, on_step=lambda s: [f(s) for f in hooks])
     late = [o for t, o in zip(times, obs) if t >= 0.5 * t_end - 1e-12]
-    res = {k: float(np.mean([o[k] for o in late])) for k in late[0]}
+    scalars = [k for k in late[0] if not k.endswith("_profile")]
+    res = {k: float(np.mean([o[k] for o in late])) for k in scalars}
+    # time-averaged head profiles (the particles of a fixed skeleton barely move: same rows)
+    for name in ("base", "downstream_x_T_over_10"):
+        prof = [o[name + "_profile"] for o in late]
+        n = min(len(p[2]) for p in prof)
+        res[name + "_profile"] = (prof[-1][0][:n], prof[-1][1][:n], np.mean([p[2][:n] for p in prof], axis=0))
+    q_ref, _ = reference_discharge()
     res.update(
-        Q_over_reference=res["Q"] / Q_REFERENCE,
-        series=obs,
+        Q_over_reference=res["Q"] / (q_ref * K * (H_UP - H_DOWN)),
+        Q_over_kdH_series=[o["Q_over_kdH"] for o in obs],
+        Q_series=[o["Q"] for o in obs],
+        h_up_series=[o["h_up"] for o in obs],
+        h_down_series=[o["h_down"] for o in obs],
+        line_series=[o["downstream_x_T_over_10"] for o in obs],
         t=times,
         particles=sim.particles.n_owned,
         steps=sim.step_count,
         wall=wall,
         cpu=cpu,
         dx=T / resolution,
+        h=sim.h,
         formulation=formulation,
+        diffusion=diffusion,
     )
     return res
 
 
-if __name__ == "__main__":  # NUMBA_NUM_THREADS=1 python -m verification.seepage_sheet_pile [resolution t_end]
+def checks(r):
+    """The checks of one run (seed form) against the reference (tolerances above)."""
+    q_ref, gci = reference_discharge()
+    series = np.asarray(r["Q_over_kdH_series"])
+    late = np.asarray(r["t"]) >= 0.5 * r["t"][-1] - 1e-12
+    drift = (series[late][-1] - series[late][0]) / q_ref
+    h_over_t = r["h"] / T
+    head_src = f"h / T = {h_over_t:.3f}: support truncation at the floor and the ground (error analysis)"
+    f = r["formulation"]
+    return [
+        Check(f"{f}: Q / (k dH) / reference - 1", r["Q_over_kdH"] / q_ref - 1.0, Q_TOLERANCE + gci, Q_SOURCE),
+        Check(f"{f}: Q steady over the averaging window", drift, Q_TOLERANCE, Q_SOURCE),
+        Check(f"{f}: base line, max normalised head error", r["base"], h_over_t, head_src),
+        Check(f"{f}: line x = w/2 + T/10, max normalised head error", r["downstream_x_T_over_10"],
+              h_over_t, head_src),
+    ]  # fmt: skip
+
+
+def run(resolution=DEFAULT_RESOLUTION, out_dir=None, formulations=("seed",)):
+    runs = {f: run_one(resolution, formulation=f) for f in formulations}
+    first = runs[formulations[0]]
+    res = CaseResult(
+        "seepage_sheet_pile",
+        resolution,
+        first["particles"],
+        sum(r["steps"] for r in runs.values()),
+        sum(r["wall"] for r in runs.values()),
+        runs,
+        cpu_time=sum(r["cpu"] for r in runs.values()),
+    )
+    q_ref, gci = reference_discharge()
+    for f, r in runs.items():
+        res.checks += checks(r)
+        res.notes.append(
+            f"{f}: Q = {r['Q']:.4g} m2/s = {r['Q_over_reference']:.4f} of the reference's at "
+            f"H = {H_UP - H_DOWN:g} m; "
+            f"pond heads {r['h_up']:.5f} / {r['h_down']:.5f} m; Q/(k dH) = {r['Q_over_kdH']:.4f} against "
+            f"{q_ref:.5f} +- {100 * gci:.2f} % ({Q_REF_SOURCE}); {r['steps']} steps, {r['wall']:.1f} s wall, "
+            f"{r['cpu']:.1f} s CPU"
+        )  # fmt: skip
+    if out_dir is not None:
+        res.figure = figure(runs, Path(out_dir) / f"seepage_sheet_pile_r{resolution}.png")
+    return res
+
+
+def figure(runs, path):
+    """Q/(k dH) over time, and the normalised heads along the two lines against the reference."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    q_ref, gci = reference_discharge()
+    fig, axs = plt.subplots(1, 3, figsize=(14, 4))
+    axs[0].axhline(q_ref, color="k", label=f"OpenFOAM (40 mm pile) {q_ref:.4f}")
+    for (label, r), mark in zip(runs.items(), "osd^v"):
+        axs[0].plot(r["t"][1:], r["Q_over_kdH_series"][1:], mark + "-", ms=4, label=f"SPH {label}")
+        x, y, hn = r["base_profile"]
+        axs[1].plot(x, hn, mark, ms=3, mfc="none", label=f"SPH {label}")
+        x, y, hn = r["downstream_x_T_over_10_profile"]
+        axs[2].plot(hn, y, mark, ms=3, mfc="none", label=f"SPH {label}")
+    xr, _, hr = reference_line("base")
+    axs[1].plot(xr, (hr - H_DOWN) / (H_UP - H_DOWN), "k-", label="OpenFOAM T/80")
+    _, yr, hr = reference_line("downstream_x_T_over_10")
+    axs[2].plot((hr - H_DOWN) / (H_UP - H_DOWN), yr, "k-", label="OpenFOAM T/80")
+    axs[0].set(xlabel="t (s)", ylabel="Q / (k dH)", title="discharge under the pile")
+    axs[1].set(xlabel="x - x_pile (m)", ylabel="(h - h_down) / dH", title="head along the base")
+    axs[2].set(
+        xlabel="(h - h_down) / dH", ylabel="y (m)", title=f"head at x = w/2 + T/10 = {0.5 * W + T / 10:g} m"
+    )
+    for ax in axs:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT, formulations=("seed",)):
+    rows, runs = [], {}
+    q_ref, gci = reference_discharge()
+    for res_ in resolutions:
+        for f in formulations:
+            r = run_one(res_, formulation=f)
+            runs[f"{f}, dx = {1e3 * r['dx']:g} mm"] = r
+            rows.append(
+                {
+                    "resolution": res_, "formulation": f, "dx_mm": 1e3 * r["dx"], "particles": r["particles"],
+                    "steps": r["steps"], "wall_time_s": r["wall"], "cpu_time_s": r["cpu"],
+                    "Q_over_kdH": r["Q_over_kdH"], "Q_error": r["Q_over_kdH"] / q_ref - 1.0,
+                    "Q_over_reference": r["Q_over_reference"], "h_up": r["h_up"], "h_down": r["h_down"],
+                    "base_max_error": r["base"], "line_max_error": r["downstream_x_T_over_10"],
+                    "load_1min": os.getloadavg()[0],
+                    "checks": "; ".join(f"{c.metric}: {'pass' if c.passed else 'FAIL'}" for c in checks(r)),
+                }
+            )  # fmt: skip
+    note = (
+        f"Stepping only, one process, NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
+        f"{machine_load()}. Reference Q/(kH) = {q_ref:.5f} +- {100 * gci:.2f} % ({Q_REF_SOURCE}).\n"
+        "Reproduce: `NUMBA_NUM_THREADS=1 python -m verification.seepage_sheet_pile --study`"
+    )
+    save_study(rows, out_dir, "resolution_study", note)
+    figure(runs, Path(out_dir) / "seepage_sheet_pile_study.png")
+    return rows
+
+
+if __name__ == "__main__":
     import sys
 
-    args = [float(a) for a in sys.argv[1:]]
-    r = run_one(int(args[0]) if args else 10, args[1] if len(args) > 1 else 0.3)
-    for t, o in zip(r["t"], r["series"]):
-        print(f"t {t:.3f} s: Q/Q_ref {o['Q'] / Q_REFERENCE:.4f}, Q/(k dH_sph) {o['Q_over_kdH']:.4f} "
-              f"(ref 0.5), h_up {o['h_up']:.5f} h_down {o['h_down']:.5f}; max |h - h_ref|/H: base "
-              f"{o['base']:.4f}, x=T/10 {o['downstream_x_T_over_10']:.4f}; normalised by the SPH drop: "
-              f"{o['base_normalised']:.4f}, {o['downstream_x_T_over_10_normalised']:.4f}")  # fmt: skip
-    print({k: v for k, v in r.items() if k not in ("series", "t")})
+    from .common import case_main
+
+    raise SystemExit(case_main(sys.modules[__name__]))

@@ -28,6 +28,8 @@ Cells
   overflow_jet_dx{D}     scenes/scour_dry.toml (q = 0.11, the study's highest) to 0.25 s: the nappe lands
                          at t = 0 (prefill) and scours the dry layer. Also checked: the body leak counter
                          is 0 and the volume balance holds within one particle volume.
+  saturated_jet_dx{D}    scenes/scour_saturated.toml with its inlet (q = 0.11) to 0.25 s: the same nappe onto
+                         the two-phase bed, seepage coupling included (issue 11 item 9's hard case at 2.5 mm).
 
 Checks per cell (CellResult.ok)
   no blow-up      the solver's own checks (NaN, particle outside the domain, wall crossing deeper
@@ -216,13 +218,16 @@ def block_drop_scene(dx, end_time=DROP_END):
     return _parse(raw, COLLAPSE)
 
 
-def scour_scene(saturated, dx, end_time=SCOUR_END):
-    """The scour scenes at spacing dx; the saturated bed without its inlet (a bed at rest)."""
+def scour_scene(saturated, dx, end_time=SCOUR_END, jet=None):
+    """The scour scenes at spacing dx. jet: keep the inlet (default: the dry scene keeps it, the
+    saturated one drops it and is a bed at rest)."""
     path = SCOUR_SATURATED if saturated else SCOUR_DRY
     raw = tomllib.loads(path.read_text())
     raw["scene"].update(spacing=float(dx), end_time=float(end_time))
     raw["output"] = {"interval": float(end_time), "vtk": False, "render": False}
-    if saturated:
+    if jet is None:
+        jet = not saturated
+    if not jet:
         raw["scene"]["name"] = "saturated_bed"
         del raw["inlets"]
     return _parse(raw, path)
@@ -271,10 +276,14 @@ def cells():
             Cell(f"block_drop_dx{_mm(dx)}", "block_drop", lambda d=dx: (block_drop_scene(d), _drop), DROP_END)
         )
     for dx in SCOUR_SPACINGS:
-        for saturated, fam in ((True, "saturated_bed"), (False, "overflow_jet")):
+        for saturated, jet, fam in ((True, False, "saturated_bed"), (False, True, "overflow_jet"),
+                                    (True, True, "saturated_jet")):  # fmt: skip
             out.append(
                 Cell(
-                    f"{fam}_dx{_mm(dx)}", fam, lambda d=dx, s=saturated: (scour_scene(s, d), None), SCOUR_END
+                    f"{fam}_dx{_mm(dx)}",
+                    fam,
+                    lambda d=dx, s=saturated, j=jet: (scour_scene(s, d, jet=j), None),
+                    SCOUR_END,
                 )
             )
     for c in out:

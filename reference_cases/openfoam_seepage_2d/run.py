@@ -37,6 +37,11 @@ Reduced data (data/, CSV with a provenance header):
 * head_field.csv: the finest Laplace head field on a T/20 grid (initial pore pressure
   for an SPH run, full-field comparison). Near the pile tip (r^-1/2 gradient) and along
   the pile (h jumps across it) bilinear interpolation between cell centres is coarse.
+
+`--pile-thickness w` replaces the baffle by a solid pile |x| < w/2 (a hole in the upper row of
+blocks, wall patch `pile`) and writes data/pile_w<mm>mm/ with its own manifest.json and inputs/:
+the reference of the SPH comparison (verification/seepage_sheet_pile.py), whose pile cannot be
+thinner than 3 particles. The vertical head line is then T/10 downstream of the pile's face.
 """
 
 from __future__ import annotations
@@ -81,6 +86,11 @@ class Geometry:
     nu: float = 1e-6  # water kinematic viscosity (m2/s)
     g: float = 9.81
     rho_w: float = 1000.0
+    pile_thickness: float = 0.0  # w (m): 0 = the thin pile (a baffle); > 0 a solid block |x| < w/2
+
+    @property
+    def half_pile(self) -> float:
+        return 0.5 * self.pile_thickness
 
     @property
     def dh(self) -> float:
@@ -106,6 +116,24 @@ def block_mesh_dict(geo: Geometry, cells_per_t: int, column: bool = False) -> st
             "upstream": [(3, 2)],
             "downstream": [(0, 1)],
             "impermeable": [(1, 2), (3, 0)],
+        }
+    elif geo.pile_thickness > 0.0:
+        # a solid pile |x| < a from the ground down to T - s: a hole in the upper row of blocks
+        a, y0 = geo.half_pile, t - s
+        ns, npile = _cells(half - a, dx), _cells(2 * a, dx)
+        pts = [(x, y) for y in (0, y0, t) for x in (-half, -a, a, half)]
+        blocks = [
+            ((0, 1, 5, 4), (ns, ny_bot)),
+            ((1, 2, 6, 5), (npile, ny_bot)),
+            ((2, 3, 7, 6), (ns, ny_bot)),
+            ((4, 5, 9, 8), (ns, ny_top)),
+            ((6, 7, 11, 10), (ns, ny_top)),
+        ]
+        patches = {
+            "upstream": [(8, 9)],
+            "downstream": [(10, 11)],
+            "impermeable": [(0, 1), (1, 2), (2, 3), (0, 4), (4, 8), (3, 7), (7, 11)],
+            "pile": [(5, 9), (5, 6), (6, 10)],
         }
     else:
         y0 = t - s
@@ -209,13 +237,21 @@ class Field2D:
     h: np.ndarray
 
     @classmethod
-    def from_cells(cls, centres: np.ndarray, values: np.ndarray, dx: float) -> Field2D:
+    def from_cells(cls, centres: np.ndarray, values: np.ndarray, dx: float, holes: bool = False) -> Field2D:
+        """With `holes` (a thick pile), cells missing from the grid take the value of the nearest
+        cell of their row: the pile's faces are impermeable (zero normal gradient), so this is the
+        zero-gradient extrapolation up to the face that `at` uses at every wall."""
         x, y = centres[:, 0], centres[:, 1]
         xs, ys = np.unique(np.round(x / dx, 6)), np.unique(np.round(y / dx, 6))
         ix = np.searchsorted(xs, np.round(x / dx, 6))
         iy = np.searchsorted(ys, np.round(y / dx, 6))
         grid = np.full((len(ys), len(xs)), np.nan)
         grid[iy, ix] = values
+        if holes:
+            for row in grid:
+                ok = np.flatnonzero(~np.isnan(row))
+                for i in np.flatnonzero(np.isnan(row)):
+                    row[i] = row[ok[np.argmin(np.abs(ok - i))]]
         assert not np.isnan(grid).any(), "mesh is not a full uniform grid"
         return cls(xs * dx, ys * dx, grid)
 
@@ -242,7 +278,7 @@ def discharge_laplace(f: Field2D, geo: Geometry, dx: float) -> tuple[float, floa
     """Finite-volume boundary fluxes (per unit depth) through the ground surface: the flux
     laplacianFoam itself uses at a fixedValue face, k (h_P - h_b)/(dx/2) dx."""
     top = f.h[-1]
-    left, right = f.xc < 0, f.xc > 0
+    left, right = f.xc < -geo.half_pile, f.xc > geo.half_pile  # the pile's own columns are not ground
     q_in = float(np.sum(geo.k * (geo.h_up - top[left]) / (0.5 * dx) * dx))
     q_out = float(np.sum(geo.k * (top[right] - geo.h_down) / (0.5 * dx) * dx))
     return q_in, q_out
@@ -260,7 +296,7 @@ def run_one(
 ) -> dict:
     app = SOLVERS[solver]
     C.require("blockMesh", app, "postProcess")
-    label = f"{'column' if column else 'pile'}_{solver}_T{cells_per_t}"
+    label = f"{'column' if column else 'pile' + pile_tag(geo)}_{solver}_T{cells_per_t}"
     work = Path(work) if work is not None else WORK_DIR / label
     write_case(work, solver, geo, cells_per_t, column, case_values(geo, n_iter, residual))
     logs = work / "logs"
@@ -277,7 +313,8 @@ def run_one(
     centres = read_internal_field(work / "0" / "C")
     n_cells = len(centres)
     if solver == "laplace":
-        field = Field2D.from_cells(centres, read_internal_field(last / "T", n_cells), dx)
+        holes = geo.pile_thickness > 0 and not column
+        field = Field2D.from_cells(centres, read_internal_field(last / "T", n_cells), dx, holes)
         if column:
             q_in = float(np.sum(geo.k * (geo.h_up - field.h[-1]) / (0.5 * dx) * dx))
             q_out = float(np.sum(geo.k * (field.h[0] - geo.h_down) / (0.5 * dx) * dx))
@@ -285,7 +322,7 @@ def run_one(
             q_in, q_out = discharge_laplace(field, geo, dx)
     else:
         p = read_internal_field(last / "p", n_cells)
-        field = Field2D.from_cells(centres, p / geo.g, dx)
+        field = Field2D.from_cells(centres, p / geo.g, dx, geo.pile_thickness > 0 and not column)
         phi = last / "phi"
         depth = dx  # the mesh is one cell (dx) thick
         q_in = -float(read_patch_values(phi, "upstream").sum()) / depth
@@ -313,6 +350,16 @@ def run_one(
     }
 
 
+def pile_tag(geo: Geometry) -> str:
+    """'' for the thin pile, '_w40mm' for a 40 mm thick one (labels, the data subdirectory)."""
+    return f"_w{round(geo.pile_thickness * 1000):d}mm" if geo.pile_thickness > 0 else ""
+
+
+def data_dir(geo: Geometry) -> Path:
+    """data/ for the thin pile; data/pile_w40mm/ (its own manifest and inputs) for a thick one."""
+    return DATA_DIR / f"pile{pile_tag(geo)}" if geo.pile_thickness > 0 else DATA_DIR
+
+
 def _is_time(name: str) -> bool:
     try:
         float(name)
@@ -331,12 +378,12 @@ def sample_lines(f: Field2D, geo: Geometry) -> list[tuple]:
     for x, h in zip(xs, f.at(xs, np.zeros_like(xs))):
         rows.append(("base", x, 0.0, h))
     ys = np.arange(0.0, t + 0.5 * step, step)
-    x_line = 0.1 * t
+    x_line = geo.half_pile + 0.1 * t  # T/10 downstream of the pile's face
     for y, h in zip(ys, f.at(np.full_like(ys, x_line), ys)):
         rows.append(("downstream_x_T_over_10", x_line, y, h))
     # exit gradient along the downstream ground surface: (h(x, T - T/40) - h_down)/(T/40)
     # from the interpolated field (a finite-difference estimate, resolution T/40)
-    xe = np.arange(step, half + 0.5 * step, step)
+    xe = np.arange(geo.half_pile + step, half + 0.5 * step, step)
     dy = t / 40
     he = f.at(xe, np.full_like(xe, t - dy))
     for x, h in zip(xe, he):
@@ -357,9 +404,9 @@ def run_all(
     if tiny:
         meshes = (TINY_CELLS,)
     official = out is None and not tiny
-    out = Path(out) if out is not None else (DATA_DIR if not tiny else WORK_DIR / "tiny" / "reduced")
+    out = Path(out) if out is not None else (data_dir(geo) if not tiny else WORK_DIR / "tiny" / "reduced")
     out.mkdir(parents=True, exist_ok=True)
-    work_root = WORK_DIR / ("tiny" if tiny else "full")
+    work_root = WORK_DIR / (("tiny" if tiny else "full") + pile_tag(geo))
     results, t_all = [], time.perf_counter()
     # the column is 4 cells (4 T/10) wide: Q = k (H/T) * width
     q_darcy_column = geo.k * geo.dh / geo.thickness * 4 * geo.thickness / TINY_CELLS
@@ -373,7 +420,7 @@ def run_all(
         for solver in SOLVERS:
             if solver == "porous" and n > 40 and not tiny:
                 continue  # the Laplace solve carries the finest mesh; porous to T/40
-            results.append(run_one(solver, n, geo, work=work_root / f"pile_{solver}_T{n}"))
+            results.append(run_one(solver, n, geo, work=work_root / f"pile{pile_tag(geo)}_{solver}_T{n}"))
     factor = sheet_pile_shape_factor(geo.penetration, geo.thickness)
     q_exact = geo.k * geo.dh * factor
 
@@ -383,7 +430,9 @@ def run_all(
         f"openfoam {C.debian_package_version('openfoam')}; sheet pile at x=0 to depth s={geo.penetration} m "
         f"in a layer T={geo.thickness} m, x in [-{geo.half_length}, {geo.half_length}] m; "
         f"h_up={geo.h_up} m, h_down={geo.h_down} m above the base; k={geo.k} m/s; "
-        f"closed form Q/(kH)={factor:.6f} (Harr 1962, unbounded layer)\n"
+        f"closed form Q/(kH)={factor:.6f} (Harr 1962, unbounded layer, thin pile)"
+        + (f"; pile {geo.pile_thickness} m thick (|x| < {geo.half_pile} m)" if geo.pile_thickness > 0 else "")
+        + "\n"
     )
     with open(out / "discharge.csv", "w", newline="") as fh:
         fh.write(header)
@@ -427,7 +476,8 @@ def run_all(
             "version": results[0]["version"],
             "debian_package": f"openfoam {C.debian_package_version('openfoam')}",
         },
-        "reproduce": "python -m reference_cases.openfoam_seepage_2d.run",
+        "reproduce": "python -m reference_cases.openfoam_seepage_2d.run"
+        + (f" --pile-thickness {geo.pile_thickness:g}" if geo.pile_thickness > 0 else ""),
         "parameters": {**asdict(geo), "darcy_d_per_m2": geo.darcy_d, "dh_m": geo.dh},
         "environment": FOAM_ENV,
         "closed_form": {
@@ -448,7 +498,10 @@ def run_all(
         "host": C.host_facts(),
         "runs": entry_runs,
     }
-    if official:
+    if official and geo.pile_thickness > 0:
+        (out / "manifest.json").write_text(json.dumps(top, indent=2) + "\n")
+        save_inputs(results, out / "inputs")
+    elif official:
         MANIFEST.write_text(json.dumps(top, indent=2) + "\n")
         save_inputs(results)
     else:
@@ -481,15 +534,15 @@ def write_head_field(results, geo: Geometry, path: Path, header: str) -> None:
             w.writerow([f"{x:.6g}", f"{y:.6g}", f"{hh:.9g}", f"{geo.rho_w * geo.g * (hh - y):.6g}"])
 
 
-def save_inputs(results) -> None:
+def save_inputs(results, inputs_dir: Path = INPUTS_DIR) -> None:
     """The exact dictionaries of the official runs (small text), for the record."""
-    if INPUTS_DIR.exists():
-        shutil.rmtree(INPUTS_DIR)
+    if inputs_dir.exists():
+        shutil.rmtree(inputs_dir)
     for r in results:
         for sub in ("system", "constant", "0"):
             for src in (r["work"] / sub).glob("*"):
                 if src.is_file() and src.name not in ("C", "Cx", "Cy", "Cz"):
-                    dst = INPUTS_DIR / r["label"] / sub / src.name
+                    dst = inputs_dir / r["label"] / sub / src.name
                     dst.parent.mkdir(parents=True, exist_ok=True)
                     shutil.copy(src, dst)
 
@@ -545,8 +598,14 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=None)
     p.add_argument("--half-length", type=float, default=None, help="L (m), each side of the pile")
     p.add_argument("--keep-fields", action="store_true")
+    p.add_argument(
+        "--pile-thickness", type=float, default=0.0,
+        help="w (m): a solid pile |x| < w/2 instead of the thin baffle (data/pile_w<mm>mm/)",
+    )  # fmt: skip
     a = p.parse_args(argv)
-    geo = Geometry() if a.half_length is None else Geometry(half_length=a.half_length)
+    geo = Geometry(pile_thickness=a.pile_thickness)
+    if a.half_length is not None:
+        geo = Geometry(half_length=a.half_length, pile_thickness=a.pile_thickness)
     res = run_all(tuple(a.cells_per_T), geo, a.out, a.tiny, a.keep_fields)
     print(f"closed form Q/(kH) = {res['factor']:.6f}")
     for m in res["study"]["per_mesh"]:

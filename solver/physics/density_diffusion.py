@@ -40,10 +40,10 @@ import numpy as np
 from numba import prange
 
 from ..config import kernel
-from ..fields import RHO_REF
+from ..fields import PORE_LABEL, RHO_REF
 from ..kernels import cubic_spline_dwdr
 from ..materials import Phase
-from ..scene import DensityDiffusion, Leapfrog
+from ..scene import DensityDiffusion, Leapfrog, Seepage
 from ..term import Equation, Stage, Term
 from .tait_eos import saturated_mixture
 
@@ -65,16 +65,17 @@ def density_diffusion(
     rho_ref=None,  # hydrostatic reference density per particle: Fourtakas et al. (2019)
     grad_rho=None,  # renormalised density gradient per particle: Antuono et al. (2010)
     is3d=None,
-    fraction=None,  # water volume fraction (pore water of the mixture seepage): diffuse rho / fraction
+    fraction=None,  # < 1 marks pore water: the mixture's water_fraction or the seed's pore_label
 ):
     """drho_i += delta h c0 sum_j psi_ij . grad_i W_ij m_j / rho_j (see module doc for psi_ij).
 
-    With `fraction` (the mixture seepage's water fractions, docs/seepage.md) pore water (fraction
-    < 1) takes no part: neither as a target nor as a neighbour. In pores the diffusion of rho is a
-    diffusion of the pore pressure with diffusivity delta h c0, i.e. a spurious permeability
-    k_num = delta h c0 gamma_w (m_v + n / K_w) next to the soil's k: it drained Terzaghi's column
-    1.85 times too fast (docs/seepage.md, "Density diffusion and pore water"), while the drag,
-    relaxing at n g / k, already damps the acoustic noise the diffusion is there for."""
+    With `fraction` (the mixture seepage's water fractions or the seed seepage's pore labels,
+    docs/seepage.md) pore water (fraction < 1) takes no part: neither as a target nor as a
+    neighbour. In pores the diffusion of rho is a diffusion of the pore pressure with
+    diffusivity delta h c0, i.e. a spurious permeability k_num = delta h c0 gamma_w
+    (m_v + n / K_w) next to the soil's k: it drained Terzaghi's column 1.85 times too fast
+    (docs/seepage.md, "Density diffusion and pore water"), while the drag, relaxing at
+    n g / k, already damps the acoustic noise the diffusion is there for."""
     for t in prange(targets.shape[0]):
         i = targets[t]
         if fraction is not None and fraction[i] < 1.0:
@@ -228,16 +229,27 @@ def water_level(scene) -> float:
     return level if np.isfinite(level) else 0.0
 
 
+def pore_field(scene):
+    """The field that marks pore water (value < 1) for the density diffusion, or None: the
+    mixture's water_fraction, or the seed seepage's pore_label (its pore water keeps its true
+    density, so the EOS must not see a fraction). Both label the water a saturated block creates."""
+    if saturated_mixture(scene):
+        return "water_fraction"
+    if scene.numerics.seepage == Seepage.SEED and any(b.saturated for b in scene.blocks):
+        return "pore_label"
+    return None
+
+
 def diffusion_settings(scene, materials):
-    """(delta, hydrostatic reference?, pore-water fractions?) of numerics.density_diffusion, or
-    None when it is off or the scene has no water."""
+    """(delta, hydrostatic reference?, the pore-water field or None) of
+    numerics.density_diffusion, or None when it is off or the scene has no water."""
     kind = scene.numerics.density_diffusion
     if kind == DensityDiffusion.NONE or not materials.has_phase(Phase.WATER):
         return None
     return (
         scene.numerics.density_diffusion_delta,
         kind == DensityDiffusion.FOURTAKAS,
-        saturated_mixture(scene),
+        pore_field(scene),
     )
 
 
@@ -309,11 +321,10 @@ class DensityDiffusionRate(Term):
         super().__init__()
         self.sound_speed = materials.sound_speed
         self.delta, self.hydrostatic, self.fraction = delta, hydrostatic, fraction
-        self.reads = (
-            ("x", "rho", "mass")
-            + (("rho_ref",) if hydrostatic else ())
-            + (("water_fraction",) if fraction else ())
-        )
+        self.reads = ("x", "rho", "mass") + (("rho_ref",) if hydrostatic else ())
+        self.reads += (fraction,) if fraction else ()
+        if fraction == "pore_label":
+            self.fields = {"pore_label": PORE_LABEL}
         self.adds_to = ("drho",)
         self.equations = (diffusion_equation(delta, hydrostatic, fraction),)
 
@@ -322,5 +333,5 @@ class DensityDiffusionRate(Term):
         density_diffusion(
             nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["material"], self.sound_speed,
             self.delta, ctx.h, ctx.norm, ps["drho"], ps["rho_ref"] if self.hydrostatic else None, None,
-            ctx.is3d, ps["water_fraction"] if self.fraction else None,
+            ctx.is3d, ps[self.fraction] if self.fraction else None,
         )  # fmt: skip

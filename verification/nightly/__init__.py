@@ -7,7 +7,7 @@ previous nights become one static HTML page and one JSON file. The interface a c
 the report is in docs/nightly_report.md.
 
     run_case.py   the child process: one case, its checks, figures, study rows, timings
-    collect.py    runs the children, one after the other, with a CPU-time limit and a wall timeout each
+    collect.py    runs the children (two side by side), with a CPU-time limit and a wall timeout each
     history.py    the history file (one JSON line per night) and the regression flags
     plots.py      accuracy against wall and CPU time; trends over the nights
     page.py       the HTML page (no script, images embedded as base64 PNG)

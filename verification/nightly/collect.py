@@ -1,4 +1,7 @@
-"""Run every case of the nightly in its own process, one after the other.
+"""Run every case of the nightly in its own process, `jobs` of them side by side (default 2,
+one per core of this machine; each case runs on one thread, so two cases never share a core),
+the costliest first (by the CPU time each took the previous night) so that the last case to
+start is a short one.
 
 A case that raises, segfaults, runs out of memory, passes its CPU-time limit (RLIMIT_CPU: a
 runaway case, whatever the load) or its wall-time timeout (a case that hangs) is recorded as
@@ -6,7 +9,8 @@ crashed (with the end of its log) and the next case starts. The wall timeout is 
 this shared host a case can get 1-10 % of a core for an hour while other jobs run. The parent
 measures each child's wall time and CPU time (resource.getrusage of the waited child: the
 whole process, imports and compile included) and the 1-minute load before and after, beside
-the child's own timings.
+the child's own timings. The CPU time is exact per child even when cases run side by side:
+the child is reaped with os.wait4, whose resource usage is that child's and its descendants'.
 """
 
 from __future__ import annotations
@@ -17,15 +21,12 @@ import resource
 import signal
 import subprocess
 import sys
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _children_cpu():
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
 
 
 def unexpected(check):
@@ -84,24 +85,23 @@ def run_case(name, module, out_dir, timeout, threads=1, flags=(), cpu_limit=None
         str(out_dir),
     ]
     cmd += list(flags)
-    load_before, cpu_before, start = os.getloadavg()[0], _children_cpu(), time.perf_counter()
-    crash = None
+    load_before, start = os.getloadavg()[0], time.perf_counter()
     with open(out_dir / "log.txt", "w") as log:
-        try:
-            proc = subprocess.run(
-                cmd,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=env,
-                timeout=timeout,
-                cwd=ROOT,
-                preexec_fn=_limit_cpu(cpu_limit) if cpu_limit else None,
-            )
-            if proc.returncode != 0:
-                crash = _ended(proc.returncode)
-        except subprocess.TimeoutExpired:
-            crash = f"timed out after {timeout:.0f} s of wall time (killed)"
-    wall, cpu = time.perf_counter() - start, _children_cpu() - cpu_before
+        proc = subprocess.Popen(
+            cmd,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env=env,
+            cwd=ROOT,
+            preexec_fn=_limit_cpu(cpu_limit) if cpu_limit else None,
+        )
+        returncode, cpu, timed_out = _wait(proc, timeout)
+    wall = time.perf_counter() - start
+    crash = None
+    if timed_out:
+        crash = f"timed out after {timeout:.0f} s of wall time (killed)"
+    elif returncode != 0:
+        crash = _ended(returncode)
     record = json.loads(case_json.read_text()) if case_json.exists() else {"case": name, "module": module}
     if crash or not case_json.exists():
         record["crash"] = (crash or "no case.json written") + "; end of log:\n" + _tail(out_dir / "log.txt")
@@ -119,6 +119,26 @@ def run_case(name, module, out_dir, timeout, threads=1, flags=(), cpu_limit=None
     return record
 
 
+def _wait(proc, timeout):
+    """(exit code, CPU seconds of the child and its descendants, timed out?) once proc ends; a
+    timer kills it after `timeout` wall seconds. os.wait4 reaps this one child, so its CPU time
+    is its own, not that of a case running beside it."""
+    fired = threading.Event()
+
+    def kill():
+        fired.set()
+        proc.kill()
+
+    timer = threading.Timer(timeout, kill)
+    timer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+    finally:
+        timer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here: Popen must not wait again
+    return proc.returncode, usage.ru_utime + usage.ru_stime, fired.is_set()
+
+
 def _tail(path, lines=40):
     try:
         return "\n".join(Path(path).read_text(errors="replace").splitlines()[-lines:])
@@ -126,16 +146,26 @@ def _tail(path, lines=40):
         return ""
 
 
-def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print, cpu_limit=None):
-    """{name: record} for {name: module} in order."""
-    records = {}
-    for name, module in cases.items():
-        progress(f"report: {name} ({module}) ...")
-        rec = run_case(name, module, Path(out_dir) / name, timeout, threads, flags, cpu_limit)
+def run_all(cases, out_dir, timeout, threads=1, flags=(), progress=print, cpu_limit=None, jobs=1, cost=None):
+    """{name: record} for {name: module}, in the order of `cases`; `jobs` cases run at a time,
+    the costliest first by `cost` ({name: CPU seconds}, e.g. the previous night's; an unknown
+    case counts as the costliest, so a new case never starts last)."""
+    cost = cost or {}
+    order = sorted(cases, key=lambda n: -cost.get(n, float("inf")))
+    lock = threading.Lock()
+
+    def one(name):
+        with lock:
+            progress(f"report: {name} ({cases[name]}) ...")
+        rec = run_case(name, cases[name], Path(out_dir) / name, timeout, threads, flags, cpu_limit)
         p = rec["process"]
-        progress(
-            f"report: {name}: {rec['status']} in {p['wall_s']:.0f} s wall, {p['cpu_s']:.0f} s CPU "
-            f"(load {p['load_1min_before']:.2f} -> {p['load_1min_after']:.2f})"
-        )
-        records[name] = rec
-    return records
+        with lock:
+            progress(
+                f"report: {name}: {rec['status']} in {p['wall_s']:.0f} s wall, {p['cpu_s']:.0f} s CPU "
+                f"(load {p['load_1min_before']:.2f} -> {p['load_1min_after']:.2f})"
+            )
+        return rec
+
+    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        done = dict(zip(order, pool.map(one, order)))
+    return {name: done[name] for name in cases}

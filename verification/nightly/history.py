@@ -65,6 +65,8 @@ def entry(meta, records, bench=None, wall_s=None):
         **meta,
         "nightly_wall_s": wall_s,
         "cases": {name: rec["status"] for name, rec in records.items()},
+        # what each case cost tonight: the next night starts the costliest first
+        "case_cpu_s": {name: rec.get("process", {}).get("cpu_s") for name, rec in records.items()},
         "metrics": metrics,
         "benchmarks": benchmarks,
     }

@@ -55,5 +55,12 @@ def add_arguments(p):
         default=1,
         help="Numba threads per case process (default 1: CPU and wall time then compare with the studies)",
     )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=2,
+        help="cases run side by side, one thread each (default 2: this machine's cores; 1 runs them "
+        "one after the other)",
+    )
     p.add_argument("--no-history", action="store_true", help="do not append tonight to the history file")
     return p

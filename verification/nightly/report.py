@@ -149,6 +149,9 @@ def main(args):
     except ValueError as exc:
         print(f"scoursph: error: {exc}", file=sys.stderr)
         return 2
+    if args.jobs < 1:
+        print(f"scoursph: error: --jobs: at least 1, got {args.jobs}", file=sys.stderr)
+        return 2
     root = Path(args.out)
     date = datetime.now(timezone.utc).strftime("%Y-%m-%d")
     folder = root / date
@@ -162,14 +165,21 @@ def main(args):
         f"load {meta['load_1min']:.2f})"
     )
     flags_ = ["--quick"] if args.quick else (["--no-study"] if args.no_study else [])
+    past = history.load(hist_path)
     records = collect.run_all(
-        cases, folder, args.timeout, args.case_threads, flags_, cpu_limit=args.cpu_limit
+        cases,
+        folder,
+        args.timeout,
+        args.case_threads,
+        flags_,
+        cpu_limit=args.cpu_limit,
+        jobs=args.jobs,
+        cost={k: v for k, v in (past[-1].get("case_cpu_s") or {}).items() if v} if past else None,
     )
     bench, bench_problem = load_bench(args.bench_json)
     if bench is not None:
         (folder / "bench.json").write_text(json.dumps(bench, indent=1))
     cases_wall = time.perf_counter() - start
-    past = history.load(hist_path)
     tonight = history.entry(
         meta, records, bench, wall_s=cases_wall + float((bench or {}).get("wall_s") or 0.0)
     )
@@ -183,8 +193,9 @@ def main(args):
         f"This nightly took {cases_wall / 60:.1f} min of wall time for the cases"
         + (f" and {bench_wall / 60:.1f} min for the benchmarks (gate run)" if bench_wall else "")
         + f" on this {meta['cpus']}-core machine at 1-min load {meta['load_1min']:.2f} -> "
-        f"{os.getloadavg()[0]:.2f}. The case processes used {cases_cpu / 60:.1f} min of CPU time "
-        "(one thread each): about the wall time they take on an idle machine. Per case below. "
+        f"{os.getloadavg()[0]:.2f}, {args.jobs} case(s) side by side. The case processes used "
+        f"{cases_cpu / 60:.1f} min of CPU time (one thread each): about {args.jobs} x the wall time they "
+        "take on an idle machine. Per case below. "
         + ("Quick mode: each case once at its smallest resolution, no study." if args.quick else "")
     )
     ctx = {

@@ -1,0 +1,89 @@
+"""Run the Lobovsky tank and record, besides the sensors, what the flow at the far wall looks like, for
+the comparison with the 2D interFoam reference (reference_cases/openfoam_lobovsky_impact/compare.py).
+
+python -m verification.impact_study.fields OUT.npz RESOLUTION [WALLS]
+
+WALLS: the kind of all four walls (default the case's free_slip; no_slip: the interFoam reference's).
+
+Every 1 ms of simulated time from t* = 1.8: the wall pressure profile (the case's probe, one point
+per height, y = 5, 15, ..., 295 mm), the mean particle pressure in boxes at the wall's foot
+(x > 1.61 m - BOX_W, y bands BOX_Y: the particles' own p, no probe), and over the strip within
+STRIP of the far wall the water area per unit width (sum of m / rho over STRIP: a mean depth) and
+the mass-weighted mean velocity.
+"""
+
+import sys
+import time
+
+import numpy as np
+
+from verification import impact_pressure as ip
+
+STRIP = 0.1  # m, width of the strip next to the far wall
+BOX_W = 0.02  # m, boxes at the foot of the far wall: x > 1.61 - BOX_W, y between BOX_Y edges
+BOX_Y = np.array([0.0, 0.01, 0.02, 0.04, 0.06, 0.1, 0.15])
+PROFILE_Y = np.arange(0.005, 0.3, 0.01)
+EVERY = 1.0e-3  # s
+
+
+def main():
+    out, res = sys.argv[1], int(sys.argv[2])
+    walls = sys.argv[3] if len(sys.argv) > 3 else "free_slip"
+    if walls != "free_slip":
+        parse = ip.parse_scene
+
+        def patched(raw, where):
+            raw["walls"] = {k: walls for k in raw["walls"]}
+            return parse(raw, where)
+
+        ip.parse_scene = patched
+    rec = {"t_star": [], "profile": [], "depth": [], "u": [], "v": [], "box_p": []}
+    faces = [(np.array([y]), np.array([1.0])) for y in PROFILE_Y]
+    probe = ip.wall_probe
+    last = [-1.0]
+
+    def wall_probe(sim, sensor_faces):
+        if sim.t - last[0] >= EVERY * (1 - 1e-9):
+            last[0] = sim.t
+            ps = sim.particles
+            n = ps.n_owned
+            x, v = ps["x"][:n], ps["v"][:n]
+            m, rho = ps["mass"][:n], ps["rho"][:n]
+            s = x[:, 0] > ip.TANK[0] - STRIP
+            rec["t_star"].append(sim.t / ip.TIME_SCALE)
+            rec["profile"].append(probe(sim, faces) / (ip.RHO0 * ip.G * ip.H))
+            rec["depth"].append(float((m[s] / rho[s]).sum()) / STRIP)
+            b = x[:, 0] > ip.TANK[0] - BOX_W
+            k = np.digitize(x[b, 1], BOX_Y) - 1
+            pb = ps["p"][:n][b] / (ip.RHO0 * ip.G * ip.H)
+            rec["box_p"].append(
+                [float(pb[k == j].mean()) if (k == j).any() else np.nan for j in range(len(BOX_Y) - 1)]
+            )
+            ms = m[s].sum()
+            rec["u"].append(float((m[s] * v[s, 0]).sum() / ms) if ms > 0 else 0.0)
+            rec["v"].append(float((m[s] * v[s, 1]).sum() / ms) if ms > 0 else 0.0)
+        return probe(sim, sensor_faces)
+
+    ip.wall_probe = wall_probe
+    c0 = time.process_time()
+    run, wall = ip.simulate(res)
+    np.savez(
+        out,
+        sensor_t_star=run["t_star"],
+        sensor_p_star=run["p_star"],
+        profile_y=PROFILE_Y,
+        strip=STRIP,
+        box_w=BOX_W,
+        box_y=BOX_Y,
+        cpu=time.process_time() - c0,
+        wall=wall,
+        status=run["status"],
+        walls=walls,
+        reflections=run["reflections"],
+        **{k: np.array(v) for k, v in rec.items()},
+    )
+    print(out, run["status"], f"cpu {time.process_time() - c0:.0f} s, wall {wall:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
