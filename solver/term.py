@@ -15,6 +15,8 @@ A term is a class in one module of `solver/physics/`, registered by one line in
   adds_to      rates it accumulates into (the step loop zeroes them before the rates stage)
   integrates   (value, half-step value, rate) triples the leap-frog advances
   dt_limit     its time-step constraint, if any: constant, or (constant_dt None) dt_now(ctx) each step
+  slip_image_velocity  True: across a no-slip wall it reads the images' velocities as free slip
+               (normal part reversed), through ctx.image_velocity; False: as the wall's kind says
 
 and its methods do the work on a TermContext. `build(scene, materials)` returns the term, or
 None when the scene does not call for it: then it is not compiled, allocated, exchanged or run.
@@ -68,6 +70,11 @@ class Term:
     targets: Phase | None = None
     neighbours: Phase | None = None
     changes_particles: bool = False  # adds or removes particles (then it calls ctx.request_rebuild())
+    # No-slip walls reverse the whole image velocity (Takeda et al. 1994); only the viscous shear term
+    # should see that. Terms that compress or damp by the normal approach (continuity, artificial
+    # viscosity, XSPH) read the free-slip image velocity instead (Adami et al. 2012, sec. 2.3; Morris
+    # et al. 1997): they set this and take velocities through ctx.image_velocity(self, name).
+    slip_image_velocity: bool = False
 
     def __init__(self):
         self.equations: tuple[Equation, ...] = ()
@@ -161,6 +168,13 @@ class TermContext:
         and neighbour lists after the current stage (docs/adding_a_term.md, "Adding or removing
         particles")."""
         self.rebuild_requested = True
+
+    def image_velocity(self, term: Term, name: str) -> np.ndarray:
+        """The velocity field `name` as `term` reads it on image rows: the field itself, or for a term
+        with slip_image_velocity, a copy whose wall images carry the free-slip mirror velocity."""
+        if term.slip_image_velocity and self.images is not None:
+            return self.images.slip_velocity(self.particles, name)
+        return self.particles[name]
 
     def owned_here(self, x):
         """Mask of the rows of x whose owner is this process (all of them in a serial run)."""

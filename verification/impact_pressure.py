@@ -4,7 +4,8 @@ Experiment (verification/data/README.md): tank 1.61 m x 0.6 m, water column 0.6 
 H = 0.3 m high against the left wall, released by a gate at t = 0; pressure sensors on the far
 wall with centres 3, 15, 30 and 80 mm above the floor, sampled at 20 kHz, 100 repetitions. Data:
 one repetition (event 5, sensors 1-4), the per-sample 2.5-97.5 % band over the repetitions at
-sensor 2, and the peak statistics (Table 2, second-hand). Model: 2D, free-slip walls, the gate
+sensor 2, and the peak statistics (Table 2, second-hand). Model: 2D, free-slip walls (no-slip walls,
+the physical tank: scene(..., walls="no_slip"), a studied variant that gives the same plateau), the gate
 ignored (the column is released at once, as every code we found does), water rho0 = 1000,
 c0 = 10 sqrt(2 g H) = 24.3 m/s (seed sec. 2.1), the solver's default numerics
 (numerics.scheme = "default"; the seed's scheme is one key away: run(..., scheme="seed")).
@@ -125,14 +126,18 @@ KNOWN_FAILURES = {
     PLATEAU_MEAN: "the free-slip walls of this 2D model: the SPH plateau lies above the repetitions' band "
     "(+0.21 / +0.24 / +0.28 at H/20 / H/40 / H/80), as 2D interFoam with the same free-slip walls does "
     "(+0.31 at H/20 and H/40); with no-slip walls interFoam lies inside the band "
-    "(reference_cases/openfoam_lobovsky_impact/README.md)",
+    "(reference_cases/openfoam_lobovsky_impact/README.md). No-slip SPH walls do not move it (0.766 / 0.850 "
+    "at H/20 / H/40): the physical wall shear is negligible at these particle sizes "
+    "(verification/results/impact_pressure/README.md, no-slip section)",
     PLATEAU_MEAN_2D: "SPH converges toward 2D interFoam with the same free-slip walls (0.925) from below: "
     "-0.11 / -0.07 / -0.03 at H/20 / H/40 / H/80, more than the first-order allowance from H/20-H/40 "
     "at H/20 (reference_cases/openfoam_lobovsky_impact/README.md)",
 }
 
 
-def scene(resolution, end_star=T_END, **numerics):
+def scene(resolution, end_star=T_END, walls="free_slip", **numerics):
+    """The tank at H/resolution; walls: the kind of all four ("free_slip": this case's model; "no_slip":
+    the physical tank, a variant studied in verification/results/impact_pressure/README.md)."""
     dx = H / resolution
     raw = {
         "scene": {
@@ -143,7 +148,7 @@ def scene(resolution, end_star=T_END, **numerics):
             "gravity": [0.0, -G],
         },
         "domain": {"min": [0.0, 0.0], "max": list(TANK)},
-        "walls": {s: "free_slip" for s in ("x_min", "x_max", "y_min", "y_max")},
+        "walls": {s: walls for s in ("x_min", "x_max", "y_min", "y_max")},
         "materials": {
             "water": {
                 "model": "water",
@@ -328,9 +333,9 @@ def band_statistics(band):
     }
 
 
-def simulate(resolution, end_star=T_END, **numerics):
+def simulate(resolution, end_star=T_END, walls="free_slip", **numerics):
     """Run the tank; returns (dict of series, counts and the CPU time of the stepping, its wall time)."""
-    sc = scene(resolution, end_star, **numerics)
+    sc = scene(resolution, end_star, walls, **numerics)
     sim = Simulation(sc)
     faces = face_points()
     times, values = [], []

@@ -146,6 +146,9 @@ class FluidRates(Term):
     stage = Stage.RATES
     targets = Phase.WATER
     neighbours = Phase.WATER
+    # continuity, AV and XSPH read the free-slip image velocity across no-slip walls; the shear reaches
+    # the wall through tau, built from the no-slip velocity (viscous_stress.py; Adami et al. 2012)
+    slip_image_velocity = True
 
     @classmethod
     def build(cls, scene, materials):
@@ -191,8 +194,9 @@ class FluidRates(Term):
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
+        v = ctx.image_velocity(self, "v")
         fluid_rates(
-            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["p"], ps["mass"], ps["material"],
+            nl.targets, nl.start, nl.index, ps["x"], v, ps["rho"], ps["p"], ps["mass"], ps["material"],
             self.sound_speed, ctx.h, ctx.norm, ps["drho"] if self.continuity else None, ps["acc"],
             ps["tau"] if self.viscous else None, self.av_alpha, self.av_beta,
             ps["xsph"] if self.xsph_eps > 0 else None, self.xsph_eps, ctx.is3d, self.mixed, self.apparent,

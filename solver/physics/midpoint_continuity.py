@@ -108,6 +108,7 @@ class MidpointContinuity(Term):
     stage = Stage.AFTER_DRIFT
     targets = Phase.WATER
     neighbours = Phase.WATER
+    slip_image_velocity = True  # div v sees a no-slip wall as impermeable only (Adami et al. 2012)
 
     @classmethod
     def build(cls, scene, materials):
@@ -134,8 +135,9 @@ class MidpointContinuity(Term):
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
+        v_half = ctx.image_velocity(self, "v_half")
         midpoint_continuity(
-            nl.targets, nl.start, nl.index, ps["x"], ps["x_prev"], ps["v_half"], ps["rho"], ps["mass"],
+            nl.targets, nl.start, nl.index, ps["x"], ps["x_prev"], v_half, ps["rho"], ps["mass"],
             ps["material"], self.sound_speed, ctx.h, ctx.norm, ps["drho"], self.delta,
             True if self.diffuse else None, ps["rho_ref"] if self.hydrostatic else None, ctx.is3d,
         )  # fmt: skip

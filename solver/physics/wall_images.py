@@ -160,6 +160,7 @@ class ImageWalls:
         self.n = 0
         self.vsign = None
         self.tsign = None
+        self._slip = {}  # name -> buffer of slip_velocity
 
     def rebuild(self, particles):
         """Choose images of all local rows; appends them after the local rows."""
@@ -205,6 +206,21 @@ class ImageWalls:
         """Per-image axis signs for tensors, T'_ab = t_a t_b T_ab: the mirror sign across
         free-slip walls (eq. 23), +1 across no-slip walls (stress unchanged)."""
         return self.tsign if self.tsign is not None else self.sign[: self.n]
+
+    def slip_velocity(self, particles, name):
+        """The velocity field `name` with the box walls' images carrying the free-slip mirror v' = s v
+        whatever the walls' kind (Term.slip_image_velocity); the field itself when no wall is no-slip.
+        Body images are free slip already."""
+        field = particles[name]
+        if self.vsign is None or self.n == 0:
+            return field
+        buf = self._slip.get(name)
+        if buf is None or buf.shape != field.shape:
+            buf = self._slip[name] = np.empty_like(field)
+        n = particles.n_total
+        buf[:n] = field[:n]
+        refresh_image_velocities(particles.n_local, self.src[: self.n], self.sign[: self.n], buf)
+        return buf
 
     def refresh(self, particles, names, specs):
         """Copy each named field from the sources to the images by its Mirror rule."""
@@ -293,6 +309,9 @@ class WallImages(Term):
 
     def refresh(self, particles, names, specs):
         self.walls.refresh(particles, names, specs)
+
+    def slip_velocity(self, particles, name):
+        return self.walls.slip_velocity(particles, name)
 
     def explain(self):
         return [f"wall kinds: {self._summary}"]

@@ -29,14 +29,6 @@ EVERY = 1.0e-3  # s
 def main():
     out, res = sys.argv[1], int(sys.argv[2])
     walls = sys.argv[3] if len(sys.argv) > 3 else "free_slip"
-    if walls != "free_slip":
-        parse = ip.parse_scene
-
-        def patched(raw, where):
-            raw["walls"] = {k: walls for k in raw["walls"]}
-            return parse(raw, where)
-
-        ip.parse_scene = patched
     rec = {"t_star": [], "profile": [], "depth": [], "u": [], "v": [], "box_p": []}
     faces = [(np.array([y]), np.array([1.0])) for y in PROFILE_Y]
     probe = ip.wall_probe
@@ -66,7 +58,7 @@ def main():
 
     ip.wall_probe = wall_probe
     c0 = time.process_time()
-    run, wall = ip.simulate(res)
+    run, wall = ip.simulate(res, walls=walls)
     np.savez(
         out,
         sensor_t_star=run["t_star"],
