@@ -501,8 +501,9 @@ def _sensitivity_section(cases, out):
         "",
         "| variant | override | "
         + " | ".join(f"d {t:g} s" for t in times)
-        + " | body leaks | balance residual | steps | wall (s) | CPU (s) | load start/end | solver |",
-        "|---|---|" + "---|" * (len(times) + 7),
+        + f" | eroded {end:g} s (cm²) | body leaks | balance residual | steps | wall (s) | CPU (s)"
+        " | load start/end | solver |",
+        "|---|---|" + "---|" * (len(times) + 8),
     ]
     rows = [base] + sorted(variants, key=lambda c: list(SENSITIVITY.values()).index(c["sets"][0])
                            if c["sets"][0] in SENSITIVITY.values() else 99)  # fmt: skip
@@ -512,6 +513,8 @@ def _sensitivity_section(cases, out):
             d, d0 = depth_at(c, t), depth_at(base, t)
             ratio = f" ({d / d0:.2f})" if c is not base and np.isfinite(d) and d0 > 0 else ""
             cells.append(f"{1000 * d:.2f}{ratio}" if np.isfinite(d) else "")
+        a, a0 = (float(np.interp(end, k["t"], k["eroded"])) for k in (c, base))
+        cells.append(f"{1e4 * a:.3f}" + (f" ({a / a0:.2f})" if c is not base and a0 > 0 else ""))
         lines.append(
             f"| {'base' if c is base else variant_label(c)} | {'; '.join(c['sets']) or '(none)'} | "
             + " | ".join(cells)
