@@ -751,6 +751,14 @@ def load_scene(path, overrides=()) -> Scene:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(path, "(syntax)", str(exc)) from None
+    apply_overrides(raw, overrides, path)
+    return parse_scene(raw, path)
+
+
+def apply_overrides(raw: dict, overrides, path) -> dict:
+    """Set "dotted.key=value" strings (value in TOML syntax; a bare word is a string; an array of
+    tables by index, inlets.0.discharge=0.08) in a raw scene dict, in place; SceneError naming
+    `path` and the key when one cannot be set. Used by load_scene and the studies' variants."""
     for item in overrides:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
@@ -777,7 +785,7 @@ def load_scene(path, overrides=()) -> Scene:
                 "names an array: only a key of one of its tables can be set (inlets.0.discharge=0.08)",
             )
         table[last] = value
-    return parse_scene(raw, path)
+    return raw
 
 
 def shipped_scenes() -> list[str]:

@@ -5,9 +5,18 @@
     python -m verification.scour_study all --end 0.5                # every missing run, then the report
     python -m verification.scour_study report                       # tables and figures from the runs made
     python -m verification.scour_study long                         # the full-length study (nightly: hours)
+    python -m verification.scour_study run saturated 0.11 --end 2.0 --continue   # extend from its checkpoint
+    python -m verification.scour_study run saturated 0.11 --end 0.5 --set materials.sand.friction_angle=28
+    python -m verification.scour_study sensitivity --end 0.5        # SENSITIVITY's variants at q = 0.11
+    mpirun -n 2 python -m verification.scour_study run saturated 0.11 --end 0.1   # case ..._np2
+    python -m verification.scour_study compare saturated_q0.11_dx5mm saturated_q0.11_dx5mm_np2
 
 A run is solver/scenes/scour_{dry,saturated}.toml (the seed's set-up, docs/scour_setup.md) with
-its inlet's discharge q, the spacing and the end time changed, and nothing else. Each run goes to
+its inlet's discharge q, the spacing and the end time changed, and nothing else; a variant adds
+`--set key=value` scene overrides (solver.scene.apply_overrides, as `scoursph run --set`), named in
+the case (`..._friction_angle28`) and listed in its summary, and a run under mpirun gets `_np<ranks>`.
+`--continue` extends a finished or stopped run from its newest checkpoint (the solver's restart:
+only the end time and the output times change), adding the new segment's CPU and wall time. Each run goes to
 runs/scour_study/<case>/ (the HDF5 series, scour.csv, scour_profiles.csv, scour.png, run.json) and
 leaves a small summary in verification/results/scour/cases/<case>.json plus a copy of its
 scour.csv there (committed: the report is rebuilt from these without the HDF5 series, except the
@@ -65,20 +74,50 @@ LONG_LENGTH = 0.60  # m: docs/scour_setup.md sec. 2, the long-run hole and its m
 SEED_TIMES = (0.005, 0.01, 0.015, 0.02, 0.025)  # the seed's figure times (and 0.015)
 EVERY = 0.025  # s between later snapshots
 FIXED_TIMES = (0.025, 0.1, 0.25, 0.5, 1.0, 2.0)  # d(q) is read at these times (those reached)
+STEADY_WINDOW = 0.5  # s: the issue's "hole stops deepening" is d changing < 2 % over this window
+STEADY_CHANGE = 0.02
+# the sensitivity runs of issue 11 item 6 for each parameter docs/scour_setup.md sec. 3 chose (base:
+# scour_saturated.toml): friction angle 33 +- 5 deg, permeability 1e-3 x10 and /10, porosity 0.35 -> 0.45
+# (0.35 is the base), the reduced bulk modulus 5.56 MPa x2 and /2
+SAND = "materials.sand."
+SENSITIVITY = {
+    "phi 28": SAND + "friction_angle=28.0",
+    "phi 38": SAND + "friction_angle=38.0",
+    "k x10": SAND + "permeability=1.0e-2",
+    "k /10": SAND + "permeability=1.0e-4",
+    "n 0.45": SAND + "porosity=0.45",
+    "K x2": SAND + "bulk_modulus=1.112e7",
+    "K /2": SAND + "bulk_modulus=2.78e6",
+}
+SENSITIVITY_CASE = ("saturated", 0.11)
 
 
-def case_name(soil, q, dx, length=0.25):
+def variant_tag(sets=(), ranks=1):
+    """The case-name tail of a variant: each override's last key and value (`_friction_angle28`),
+    and `_np<ranks>` for a run under MPI."""
+    tail = ""
+    for item in sets:
+        key, _, value = item.partition("=")
+        value = "".join(ch for ch in value.strip() if ch.isalnum() or ch in ".-+")
+        tail += f"_{key.strip().rsplit('.', 1)[-1]}{value}"
+    return tail + (f"_np{ranks}" if ranks > 1 else "")
+
+
+def case_name(soil, q, dx, length=0.25, sets=(), ranks=1):
     tail = "" if abs(length - 0.25) < 1e-12 else f"_L{length:g}"
-    return f"{soil}_q{q:.2f}_dx{dx * 1000:g}mm{tail}"
+    return f"{soil}_q{q:.2f}_dx{dx * 1000:g}mm{tail}{variant_tag(sets, ranks)}"
 
 
-def scene_raw(soil, q, dx, end_time, length=0.25):
+def scene_raw(soil, q, dx, end_time, length=0.25, sets=(), ranks=1):
     """The shipped scene with q, dx and end time changed (length: the soil layer's, docs/scour_setup.md
-    sec. 2 recommends 0.60 m for long runs; the end wall and outlet move with it)."""
+    sec. 2 recommends 0.60 m for long runs; the end wall and outlet move with it), then the variant's
+    `sets` ("dotted.key=value", as `scoursph run --set`)."""
+    from solver.scene import apply_overrides
+
     raw = tomllib.loads((SCENES / f"scour_{soil}.toml").read_text())
     raw["scene"]["spacing"] = float(dx)
     raw["scene"]["end_time"] = float(end_time)
-    raw["scene"]["name"] = case_name(soil, q, dx, length)
+    raw["scene"]["name"] = case_name(soil, q, dx, length, sets, ranks)
     raw["inlets"][0]["discharge"] = float(q)
     times = [t for t in SEED_TIMES if t <= end_time]
     k = 1
@@ -99,61 +138,108 @@ def scene_raw(soil, q, dx, end_time, length=0.25):
         end["vertices"] = [[x + shift, z] for x, z in end["vertices"]]
         raw["outlets"][0]["min"][0] += shift
         raw["outlets"][0]["max"][0] += shift
-    return raw
+    return apply_overrides(raw, sets, SCENES / f"scour_{soil}.toml")
 
 
-def run_case(soil, q, dx, end_time, length=0.25, threads=1):
-    """Run one case in this process; write its summary and scour.csv copy into RESULTS/cases."""
+def solver_commit():
+    """The commit the run's code is at (+ "-dirty" with uncommitted changes under solver/)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()  # fmt: skip
+        dirty = subprocess.run(["git", "status", "--porcelain", "solver"], cwd=ROOT, capture_output=True,
+                               text=True).stdout.strip()  # fmt: skip
+        return head + ("-dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=False):
+    """Run one case in this process (on every rank under mpirun); write its summary and scour.csv
+    copy into RESULTS/cases. `resume`: continue the case's run directory from its newest checkpoint
+    to end_time; its summary's CPU and wall time become the sums over the segments."""
     import numba
 
     from solver.errors import BlowUpError
+    from solver.interrupt import Interrupted
+    from solver.parallel.launch import communicator
     from solver.run import run_scene
     from solver.scene import parse_scene
 
+    comm = communicator()
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    name = case_name(soil, q, dx, length)
-    scene = parse_scene(scene_raw(soil, q, dx, end_time, length), SCENES / f"scour_{soil}.toml")
+    name = case_name(soil, q, dx, length, sets, comm.size)
+    scene = parse_scene(
+        scene_raw(soil, q, dx, end_time, length, sets, comm.size), SCENES / f"scour_{soil}.toml"
+    )
     out = RUNS / name
+    dest = RESULTS / "cases"
+    before = (
+        json.loads((dest / f"{name}.json").read_text()) if resume and (dest / f"{name}.json").exists() else {}
+    )
     load0 = os.getloadavg()[0]
     c0, w0 = time.process_time(), time.perf_counter()
     status = "completed"
     try:
-        run_scene(scene, out, quiet=True, overwrite=True)
+        run_scene(scene, out, comm=comm, quiet=True, overwrite=True, restart=out if resume else None)
     except BlowUpError as exc:
         status = f"blew up: {exc}"
-    except KeyboardInterrupt:  # Ctrl-C of a foreground run: run.json and scour.csv are written (a
-        # background job ignores SIGINT: kill it and use `finish`)
-        status = "stopped"
-    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    except (KeyboardInterrupt, Interrupted) as exc:  # SIGINT/SIGTERM: run.json, scour.csv and (for
+        # Interrupted) a checkpoint are written; `run ... --continue` goes on from it
+        status = f"stopped: {exc}"
+    cpu = comm.sum(time.process_time() - c0)  # every rank's
+    wall = time.perf_counter() - w0
+    if not comm.is_root():
+        return {"status": status}
     report = json.loads((out / "run.json").read_text())
+    segment = {
+        "t_start": report["segments"][-1]["t_start"],
+        "t_end": report["simulated_time_s"],
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "load_start": load0,
+        "load_end": os.getloadavg()[0],
+        "solver_commit": solver_commit(),
+        "continued": bool(resume),
+    }
+    earlier = before.get("segments") or (  # a summary written before segments were recorded
+        [{k: before[k] for k in ("wall_s", "cpu_s", "load_start", "load_end")} | {"t_start": 0.0}]
+        if before
+        else []
+    )
+    segments = earlier + [segment]
     summary = {
         "case": name,
         "soil": soil,
         "q": q,
         "dx": dx,
         "length": length,
+        "sets": list(sets),
+        "ranks": comm.size,
         "end_time": end_time,
         "status": status,
         "t_reached": report["simulated_time_s"],
         "steps": report["steps"],
         "particles_end": report["particles"],
-        "wall_s": wall,
-        "cpu_s": cpu,
-        "stepping_wall_s": report["wall_time_s"],
+        "wall_s": sum(g["wall_s"] for g in segments),
+        "cpu_s": sum(g["cpu_s"] for g in segments),
+        "stepping_wall_s": report.get("wall_time_total_s", report["wall_time_s"]),
         "threads": threads,
-        "load_start": load0,
-        "load_end": os.getloadavg()[0],
+        "load_start": segments[0]["load_start"],
+        "load_end": segment["load_end"],
         "max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "solver_commit": segment["solver_commit"],
+        "segments": segments,
         "body_leaks": report.get("body_leaks"),
         "volume_balance": report.get("volume_balance"),
     }
-    dest = RESULTS / "cases"
     dest.mkdir(parents=True, exist_ok=True)
     (dest / f"{name}.json").write_text(json.dumps(summary, indent=2) + "\n")
     if (out / "scour.csv").exists():
         (dest / f"{name}_scour.csv").write_text((out / "scour.csv").read_text())
     print(
-        f"{name}: {status}, t = {summary['t_reached']:.4f} s, {wall:.0f} s wall, {cpu:.0f} s CPU", flush=True
+        f"{name}: {status}, t = {summary['t_reached']:.4f} s, {wall:.0f} s wall, {cpu:.0f} s CPU"
+        + (f" (this segment; {summary['cpu_s']:.0f} s CPU in all)" if len(segments) > 1 else ""),
+        flush=True,
     )
     return summary
 
@@ -203,6 +289,8 @@ def load_cases():
     cases = []
     for path in sorted((RESULTS / "cases").glob("*.json")):
         c = json.loads(path.read_text())
+        c.setdefault("sets", [])
+        c.setdefault("ranks", 1)
         series = path.with_name(f"{c['case']}_scour.csv")
         rows = list(csv.DictReader(open(series))) if series.exists() else []
         c["t"] = np.array([float(r["t_s"]) for r in rows])
@@ -218,6 +306,28 @@ def depth_at(c, t):
     if not len(c["t"]) or c["t"][-1] < t - 1e-9:
         return float("nan")
     return float(np.interp(t, c["t"], c["d"]))
+
+
+def steady_change(c, window=STEADY_WINDOW):
+    """|d(T) - d(T - window)| / d(T) at the time reached T (nan before `window` or with d = 0): the
+    issue's "hole stops deepening" test is this < STEADY_CHANGE."""
+    if not len(c["t"]) or c["t"][-1] < window - 1e-9 or c["d"][-1] <= 0:
+        return float("nan")
+    T = c["t"][-1]
+    return abs(c["d"][-1] - depth_at(c, T - window)) / c["d"][-1]
+
+
+def is_base(c):
+    """A run of the shipped scene (q, dx, end time, length only): not a variant, not under MPI."""
+    return not c["sets"] and c["ranks"] == 1
+
+
+def variant_label(c):
+    """The SENSITIVITY name of a variant's overrides (else the overrides themselves)."""
+    names = {v: k for k, v in SENSITIVITY.items()}
+    return ", ".join(names.get(item, item) for item in c["sets"]) + (
+        f" (np {c['ranks']})" if c["ranks"] > 1 else ""
+    )
 
 
 def residual(c):
@@ -256,7 +366,8 @@ def report(out=RESULTS):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    cases = load_cases()
+    every = load_cases()
+    cases = [c for c in every if is_base(c)]  # variants: the sensitivity and MPI sections
     if not cases:
         print("no runs yet: python -m verification.scour_study all", file=sys.stderr)
         return 1
@@ -265,8 +376,9 @@ def report(out=RESULTS):
     # table
     fields = ["case", "soil", "q", "dx_mm", "status", "t_reached_s"]
     fields += [f"d_{t:g}s_mm" for t in fixed]
-    fields += ["d_end_mm", "x_deepest_end_m", "eroded_end_cm2", "body_leaks", "balance_residual_particles"]
-    fields += ["steps", "particles_end", "wall_s", "cpu_s", "load_start", "load_end", "threads"]
+    fields += ["d_end_mm", "d_change_last_0.5s_pct", "x_deepest_end_m", "eroded_end_cm2", "body_leaks"]
+    fields += ["balance_residual_particles", "steps", "particles_end", "wall_s", "cpu_s", "load_start"]
+    fields += ["load_end", "threads", "solver"]
     rows = []
     for c in sorted(cases, key=lambda c: (c["dx"], c["soil"], c["q"], c["length"])):
         row = {
@@ -280,7 +392,9 @@ def report(out=RESULTS):
         for t in fixed:
             v = depth_at(c, t)
             row[f"d_{t:g}s_mm"] = "" if not np.isfinite(v) else f"{1000 * v:.1f}"
-        row["d_end_mm"] = f"{1000 * c['d'][-1]:.1f}" if len(c["d"]) else ""
+        row["d_end_mm"] = f"{1000 * c['d'][-1]:.2f}" if len(c["d"]) else ""
+        change = steady_change(c)
+        row["d_change_last_0.5s_pct"] = f"{100 * change:.0f}" if np.isfinite(change) else ""
         row["x_deepest_end_m"] = f"{c['x_deepest'][-1]:.3f}" if len(c["d"]) else ""
         row["eroded_end_cm2"] = f"{1e4 * c['eroded'][-1]:.1f}" if len(c["d"]) else ""
         row["body_leaks"] = c.get("body_leaks")
@@ -292,6 +406,7 @@ def report(out=RESULTS):
         row["load_start"] = f"{c['load_start']:.1f}"
         row["load_end"] = f"{c['load_end']:.1f}"
         row["threads"] = c["threads"]
+        row["solver"] = c.get("solver_commit", "")
         rows.append(row)
     with open(out / "scour_study.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fields)
@@ -306,6 +421,9 @@ def report(out=RESULTS):
         "(set-up, JIT from cache, stepping, output), one process with `threads` Numba threads;",
         "load: 1-min load average at start and end (the 2 cores were shared with other jobs).",
         "balance residual: |inflow - outflow - stored change| in particle volumes (must be < 1).",
+        "d_change_last_0.5s_pct: |d(end) - d(end - 0.5 s)| / d(end); the issue's \"the hole stops",
+        'deepening" is < 2. solver: the commit the run was made at (a continued run: its last',
+        "segment's; empty: made before the commit was recorded, before 2026-12-01 19:30 on branch scour3).",
         "",
         "| " + " | ".join(fields) + " |",
         "|" + "---|" * len(fields),
@@ -336,15 +454,143 @@ def report(out=RESULTS):
     lines += ["| formula, grain mapping | exponent of q | depth at q = 0.06 / 0.11 (m) |", "|---|---|---|"]
     for name, (e, below) in fx.items():
         lines.append(f"| {name} | {e:.2f} | {below[0]:.3f} / {below[-1]:.3f} |")
+    lines += _sensitivity_section(every, out)
+    lines += _mpi_section(out)
     (out / "scour_study.md").write_text("\n".join(lines) + "\n")
 
     _plot_depth_vs_time(plt, cases, out / "depth_vs_time.png")
     _plot_depth_vs_q(plt, cases, fixed, fx, out / "depth_vs_q.png")
     _plot_resolution(plt, cases, out / "resolution.png")
     _plot_snapshots(plt, out / "snapshots_q0.11.png")
-    _plot_snapshots(plt, out / "snapshots_q0.11_late.png", times=(0.25, 0.5, 1.0), note="later times")
+    late = tuple(
+        t for t in (0.25, 0.5, 1.0, 2.0) if any(c["t_reached"] >= t - 1e-9 and c["q"] == 0.11 for c in cases)
+    )
+    _plot_snapshots(plt, out / "snapshots_q0.11_late.png", times=late, note="later times")
+    _plot_sensitivity(plt, every, out / "sensitivity.png")
     print(f"report in {out}/scour_study.md")
     return 0
+
+
+def sensitivity_cases(cases):
+    """(base, [variants]) of the sensitivity study: the base run of SENSITIVITY_CASE at 5 mm and its
+    serial variants (None, [] when there are none)."""
+    soil, q = SENSITIVITY_CASE
+    same = [
+        c
+        for c in cases
+        if c["soil"] == soil and abs(c["q"] - q) < 1e-9 and c["dx"] == DX and c["length"] == 0.25
+    ]
+    base = next((c for c in same if is_base(c)), None)
+    return base, [c for c in same if c["sets"] and c["ranks"] == 1]
+
+
+def _sensitivity_section(cases, out):
+    base, variants = sensitivity_cases(cases)
+    if base is None or not variants:
+        return []
+    end = min(c["t_reached"] for c in variants)
+    times = [t for t in (0.025, 0.1, 0.25, 0.5, 1.0) if t <= end + 1e-9]
+    soil, q = SENSITIVITY_CASE
+    lines = [
+        "",
+        f"## Sensitivity ({soil}, q = {q:g}, 5 mm; to {end:g} s, the end time all variants reached)",
+        "",
+        f"Each variant is the base scene with one override (`SENSITIVITY` in verification/scour_study.py,"
+        f" `--set`). d in mm; in brackets d / d_base at the same time. Base: {base['case']} (solver "
+        f"{base.get('solver_commit', '?')}).",
+        "",
+        "| variant | override | "
+        + " | ".join(f"d {t:g} s" for t in times)
+        + f" | eroded {end:g} s (cm²) | body leaks | balance residual | steps | wall (s) | CPU (s)"
+        " | load start/end | solver |",
+        "|---|---|" + "---|" * (len(times) + 8),
+    ]
+    rows = [base] + sorted(variants, key=lambda c: list(SENSITIVITY.values()).index(c["sets"][0])
+                           if c["sets"][0] in SENSITIVITY.values() else 99)  # fmt: skip
+    for c in rows:
+        cells = []
+        for t in times:
+            d, d0 = depth_at(c, t), depth_at(base, t)
+            ratio = f" ({d / d0:.2f})" if c is not base and np.isfinite(d) and d0 > 0 else ""
+            cells.append(f"{1000 * d:.2f}{ratio}" if np.isfinite(d) else "")
+        a, a0 = (float(np.interp(end, k["t"], k["eroded"])) for k in (c, base))
+        cells.append(f"{1e4 * a:.3f}" + (f" ({a / a0:.2f})" if c is not base and a0 > 0 else ""))
+        lines.append(
+            f"| {'base' if c is base else variant_label(c)} | {'; '.join(c['sets']) or '(none)'} | "
+            + " | ".join(cells)
+            + f" | {c.get('body_leaks')} | {residual(c):.2g} | {c['steps']} | {c['wall_s']:.0f}"
+            f" | {c['cpu_s']:.0f} | {c['load_start']:.1f}/{c['load_end']:.1f} | {c.get('solver_commit', '')}|"
+        )
+    lines += ["", "(base wall/CPU: its whole run, which may be longer than the variants'.)"]
+    return lines
+
+
+def _mpi_section(out):
+    paths = sorted(out.glob("compare_*.json"))
+    if not paths:
+        return []
+    lines = ["", "## Under mpirun (written by `python -m verification.scour_study compare A B`)", ""]
+    lines += [
+        "| run | against | times compared | max abs(d difference) (mm) | max position difference (m) "
+        "| max velocity difference (m/s) | particle count, ids | CPU A / B (s) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for path in paths:
+        r = json.loads(path.read_text())
+        lines.append(
+            f"| {r['b']} | {r['a']} | {r['times'][0]:g}-{r['times'][-1]:g} s ({len(r['times'])}) | "
+            f"{1000 * r['max_depth_difference_m']:.3g} | {r['max_position_difference_m']:.3g} | "
+            f"{r['max_velocity_difference_m_s']:.3g} | {r['ids']} | {r['cpu_a_s']:.0f} / {r['cpu_b_s']:.0f} |"
+        )
+    return lines
+
+
+def compare(a, b, out=RESULTS):
+    """Two runs of the same case (e.g. serial and mpirun -n 2): d(t) and the particle state (matched
+    by id) at every snapshot time both reached; written to RESULTS/compare_<b>_vs_<a>.json."""
+    from solver.output.hdf5_writer import read_series
+
+    cases = {c["case"]: c for c in load_cases()}
+    sa, sb = (dict((round(t, 9), f) for t, f in read_series(RUNS / n / "particles.h5")) for n in (a, b))
+    times = sorted(set(sa) & set(sb))
+    dx_max = dv_max = dd_max = 0.0
+    ids = "same"
+    for t in times:
+        fa, fb = sa[t], sb[t]
+        if not np.array_equal(fa["id"], fb["id"]):
+            ids = f"differ at t = {t:g} s ({len(fa['id'])} / {len(fb['id'])})"
+            break
+        dx_max = max(dx_max, float(np.abs(fa["position"] - fb["position"]).max()))
+        dv_max = max(dv_max, float(np.abs(fa["velocity"] - fb["velocity"]).max()))
+        dd_max = max(dd_max, abs(depth_at(cases[a], t) - depth_at(cases[b], t)))
+    result = {
+        "a": a, "b": b, "times": times, "ids": ids, "max_position_difference_m": dx_max,
+        "max_velocity_difference_m_s": dv_max, "max_depth_difference_m": dd_max,
+        "cpu_a_s": cases[a]["cpu_s"], "cpu_b_s": cases[b]["cpu_s"],
+        "wall_a_s": cases[a]["wall_s"], "wall_b_s": cases[b]["wall_s"],
+    }  # fmt: skip
+    (out / f"compare_{b}_vs_{a}.json").write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result, indent=2))
+    return result
+
+
+def _plot_sensitivity(plt, cases, path):
+    base, variants = sensitivity_cases(cases)
+    if base is None or not variants:
+        return
+    end = max(c["t_reached"] for c in variants)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    k = base["t"] <= end + 1e-9
+    ax.plot(base["t"][k], 1000 * base["d"][k], "k-", lw=2, label="base")
+    for c in variants:
+        ax.plot(c["t"], 1000 * c["d"], "-", label=variant_label(c))
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("scour depth d (mm)")
+    ax.set_title(f"sensitivity: {SENSITIVITY_CASE[0]}, q = {SENSITIVITY_CASE[1]}, 5 mm")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def _plot_depth_vs_time(plt, cases, path):
@@ -495,20 +741,23 @@ def study_cases(end_time, qs=Q_STUDY, fine=FINE):
 
 def run_all(cases, jobs=1, nice=10):
     """Run the cases not yet in RESULTS/cases (or shorter there than asked), `jobs` processes at a
-    time, each a separate `nice`d process with one Numba thread."""
+    time, each a separate `nice`d process with one Numba thread. A case is (soil, q, dx, end,
+    length) or (soil, q, dx, end, length, sets)."""
     todo = []
-    for soil, q, dx, end, length in cases:
-        done = RESULTS / "cases" / f"{case_name(soil, q, dx, length)}.json"
+    for soil, q, dx, end, length, *rest in cases:
+        sets = tuple(rest[0]) if rest else ()
+        done = RESULTS / "cases" / f"{case_name(soil, q, dx, length, sets)}.json"
         if done.exists() and json.loads(done.read_text())["t_reached"] >= end - 1e-9:
             continue
-        todo.append((soil, q, dx, end, length))
+        todo.append((soil, q, dx, end, length, sets))
     running = []
-    for soil, q, dx, end, length in todo:
+    for soil, q, dx, end, length, sets in todo:
         while len(running) >= jobs:
             running = [p for p in running if p.poll() is None]
             time.sleep(2)
         cmd = ["nice", "-n", str(nice), sys.executable, "-m", "verification.scour_study", "run", soil, str(q),
                "--dx", str(dx), "--end", str(end), "--length", str(length)]  # fmt: skip
+        cmd += [f"--set={item}" for item in sets]
         running.append(subprocess.Popen(cmd, cwd=ROOT))
     for p in running:
         p.wait()
@@ -525,6 +774,16 @@ def main(argv=None):
     r.add_argument("--end", type=float, default=END_TIME)
     r.add_argument("--length", type=float, default=0.25, help="soil layer length (m)")
     r.add_argument("--threads", type=int, default=1)
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="a scene override (as scoursph run --set), named in the case: a variant")  # fmt: skip
+    r.add_argument("--continue", dest="resume", action="store_true",
+                   help="continue the case's run from its newest checkpoint to --end")  # fmt: skip
+    sn = sub.add_parser("sensitivity", help="the SENSITIVITY variants of SENSITIVITY_CASE, one at a time")
+    sn.add_argument("--end", type=float, default=0.5)
+    sn.add_argument("--only", action="append", choices=tuple(SENSITIVITY), help="these variants only")
+    cp = sub.add_parser("compare", help="two runs of one case (serial / mpirun): d(t) and particles by id")
+    cp.add_argument("a", help="case name, e.g. saturated_q0.11_dx5mm")
+    cp.add_argument("b", help="case name, e.g. saturated_q0.11_dx5mm_np2")
     a = sub.add_parser("all", help="every missing run of the affordable study, then the report")
     a.add_argument("--end", type=float, default=END_TIME)
     a.add_argument("--jobs", type=int, default=2)
@@ -543,10 +802,24 @@ def main(argv=None):
     f.add_argument("--wall", type=float, default=float("nan"), help="wall seconds measured from outside")
     args = ap.parse_args(argv)
     if args.cmd == "run":
-        s = run_case(args.soil, args.q, args.dx, args.end, args.length, args.threads)
+        from solver.errors import SceneError
+
+        try:
+            s = run_case(
+                args.soil, args.q, args.dx, args.end, args.length, args.threads, args.set, args.resume
+            )
+        except SceneError as exc:  # a bad --set: exit 2 naming the file and key
+            print(f"scour_study: {exc}", file=sys.stderr)
+            return 2
         return 0 if s["status"] == "completed" else 1
+    if args.cmd == "compare":
+        compare(args.a, args.b)
     if args.cmd == "finish":
         finish_case(args.soil, args.q, args.dx, args.length, args.cpu, args.wall)
+    if args.cmd == "sensitivity":
+        soil, q = SENSITIVITY_CASE
+        names = args.only or tuple(SENSITIVITY)
+        run_all([(soil, q, DX, args.end, 0.25, (SENSITIVITY[n],)) for n in names], jobs=1)
     if args.cmd == "all":
         run_all(study_cases(args.end, fine=() if args.coarse_only else FINE), args.jobs)
     elif args.cmd == "long":

@@ -1,0 +1,46 @@
+"""verification/scour_study.py's variants: --set overrides named in the case and applied to the
+scene, the MPI rank tag, and the "hole stops deepening" measure (no run: these are cheap)."""
+
+import numpy as np
+import pytest
+
+from solver.errors import SceneError
+from solver.scene import parse_scene
+from verification import scour_study as st
+
+
+def test_a_variant_is_named_by_its_overrides_and_ranks():
+    assert st.case_name("saturated", 0.11, 0.005) == "saturated_q0.11_dx5mm"
+    sets = [st.SENSITIVITY["phi 28"], st.SENSITIVITY["k /10"]]
+    assert st.case_name("saturated", 0.11, 0.005, sets=sets) == (
+        "saturated_q0.11_dx5mm_friction_angle28.0_permeability1.0e-4"
+    )
+    assert st.case_name("dry", 0.06, 0.005, ranks=2) == "dry_q0.06_dx5mm_np2"
+
+
+def test_the_overrides_reach_the_scene_and_nothing_else_changes():
+    base = st.scene_raw("saturated", 0.11, 0.005, 0.5)
+    raw = st.scene_raw("saturated", 0.11, 0.005, 0.5, sets=[st.SENSITIVITY["K x2"]])
+    assert raw["materials"]["sand"]["bulk_modulus"] == 1.112e7
+    assert raw["scene"]["name"] == "saturated_q0.11_dx5mm_bulk_modulus1.112e7"
+    raw["materials"]["sand"]["bulk_modulus"] = base["materials"]["sand"]["bulk_modulus"]
+    raw["scene"]["name"] = base["scene"]["name"]
+    assert raw == base
+    for name, item in st.SENSITIVITY.items():  # every variant is a valid scene
+        scene = parse_scene(st.scene_raw("saturated", 0.11, 0.005, 0.5, sets=[item]), st.SCENES / "x.toml")
+        key, _, value = item.partition("=")
+        assert getattr(scene.materials["sand"], key.rsplit(".", 1)[-1]) == pytest.approx(float(value)), name
+
+
+def test_a_bad_override_names_its_key():
+    with pytest.raises(SceneError, match="inlets.7.discharge"):
+        st.scene_raw("dry", 0.11, 0.005, 0.5, sets=["inlets.7.discharge=0.1"])
+
+
+def test_steady_change_over_the_last_half_second():
+    t = np.linspace(0.0, 2.0, 81)
+    case = {"t": t, "d": 0.002 * (1 - np.exp(-t / 0.2))}
+    expected = (case["d"][-1] - np.interp(1.5, t, case["d"])) / case["d"][-1]
+    assert st.steady_change(case) == pytest.approx(expected)
+    assert st.steady_change(case) < st.STEADY_CHANGE
+    assert np.isnan(st.steady_change({"t": t[:5], "d": case["d"][:5]}))  # shorter than the window
