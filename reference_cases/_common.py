@@ -145,5 +145,16 @@ def fill_template(text: str, values: dict) -> str:
     return text
 
 
+def copy_template(template: Path, work: Path, values: dict) -> None:
+    """A fresh case directory `work`: every file of `template` with its @KEY@ placeholders filled."""
+    if work.exists():
+        shutil.rmtree(work)
+    for src in template.rglob("*"):
+        if src.is_file():
+            dst = work / src.relative_to(template)
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            dst.write_text(fill_template(src.read_text(), values))
+
+
 def fmt(x: float, digits: int = 8) -> str:
     return f"{x:.{digits}g}"

@@ -147,13 +147,7 @@ def case_values(
 
 
 def write_case(work: Path, values: dict) -> None:
-    if work.exists():
-        shutil.rmtree(work)
-    for src in TEMPLATE_DIR.rglob("*"):
-        if src.is_file():
-            dst = work / src.relative_to(TEMPLATE_DIR)
-            dst.parent.mkdir(parents=True, exist_ok=True)
-            dst.write_text(C.fill_template(src.read_text(), values))
+    C.copy_template(TEMPLATE_DIR, work, values)
     shutil.copy(work / "0" / "alpha.water.orig", work / "0" / "alpha.water")
 
 

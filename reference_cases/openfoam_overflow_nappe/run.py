@@ -173,13 +173,7 @@ def write_case(work: Path, values: dict, only: str | None = None) -> None:
     if only is not None:
         (work / only).write_text(C.fill_template((TEMPLATE_DIR / only).read_text(), values))
         return
-    if work.exists():
-        shutil.rmtree(work)
-    for src in TEMPLATE_DIR.rglob("*"):
-        if src.is_file():
-            dst = work / src.relative_to(TEMPLATE_DIR)
-            dst.parent.mkdir(parents=True, exist_ok=True)
-            dst.write_text(C.fill_template(src.read_text(), values))
+    C.copy_template(TEMPLATE_DIR, work, values)
 
 
 # ----------------------------------------------------------------------------- reading

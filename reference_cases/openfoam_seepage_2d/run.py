@@ -199,13 +199,7 @@ def case_values(geo: Geometry, n_iter: int, residual: float) -> dict:
 
 
 def write_case(work: Path, solver: str, geo: Geometry, cells_per_t: int, column: bool, values: dict) -> None:
-    if work.exists():
-        shutil.rmtree(work)
-    for src in (TEMPLATE_DIR / solver).rglob("*"):
-        if src.is_file():
-            dst = work / src.relative_to(TEMPLATE_DIR / solver)
-            dst.parent.mkdir(parents=True, exist_ok=True)
-            dst.write_text(C.fill_template(src.read_text(), values))
+    C.copy_template(TEMPLATE_DIR / solver, work, values)
     (work / "system" / "blockMeshDict").write_text(block_mesh_dict(geo, cells_per_t, column))
 
 
