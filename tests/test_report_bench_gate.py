@@ -139,3 +139,76 @@ def test_leave_one_out_judges_each_unchanged_run_by_the_others():
     result = gate.leave_one_out([_run(r) for r in ratios], "wall")
     assert [k for k, _, flagged in result if flagged] == [9]
     assert abs(result[9][1]["water_step"] - 0.1) < 1e-12
+
+
+import reference_build  # noqa: E402
+
+REF_BASE = {
+    **BASE,
+    "reference_build": {"commit": "0" * 40, "pairs": 3, "benchmarks": {"water_step": {"threshold": 0.05}}},
+}
+
+
+def _gate_with_side_by_side(monkeypatch, calibration_ratio, reference_ratio):
+    """A gate run whose water step has `calibration_ratio` against the calibration kernel and
+    `reference_ratio` against the baseline commit's build timed side by side."""
+    monkeypatch.setattr(
+        gate,
+        "run_suite",
+        lambda slowdown=None, select=None: {
+            **_run(calibration_ratio),
+            "wall_s": 1.0,
+            "output": "",
+            "returncode": 0,
+        },
+    )
+    monkeypatch.setattr(reference_build, "reference_tree", lambda commit: ROOT)
+    monkeypatch.setattr(
+        reference_build,
+        "measurement",
+        lambda name, tree, slowdown=None, pairs=3: {
+            "ratio": reference_ratio,
+            "pair_ratios": [reference_ratio],
+        },
+    )
+    s, _ = gate.gated_run(REF_BASE, ROOT / "benchmarks" / "baselines" / "gate.json", estimator="wall")
+    return s, next(r for r in s["benchmarks"] if r["name"] == "water_step")
+
+
+def test_the_baseline_build_side_by_side_decides_a_step_benchmark(monkeypatch):
+    """A slow phase of the host moves the calibration ratio (+20 %) but not the step against the
+    baseline commit's own build (+1 %): not a regression, and no retries; a real 10 % slowdown
+    shows against the baseline build and is flagged, whatever the calibration says."""
+    s, row = _gate_with_side_by_side(monkeypatch, 1.2, 1.01)
+    assert row["calibration_regressed"] and not row["regressed"] and row["attempts"] == 1
+    assert "water_step" not in s["regressed"] and abs(row["reference_build"]["change"] - 0.01) < 1e-12
+    s, row = _gate_with_side_by_side(monkeypatch, 1.0, 1.10)
+    assert (
+        not row["calibration_regressed"]
+        and row["regressed"]
+        and s["regressed"] == ["water_step", "soil_step"]
+    )
+
+
+def test_without_the_baseline_commit_the_calibration_verdict_stands(monkeypatch):
+    def no_tree(commit):
+        raise RuntimeError("cannot export the baseline commit 000000000000: not in this clone")
+
+    monkeypatch.setattr(
+        gate,
+        "run_suite",
+        lambda slowdown=None, select=None: {**_run(1.2), "wall_s": 1.0, "output": "", "returncode": 0},
+    )
+    monkeypatch.setattr(reference_build, "reference_tree", no_tree)
+    s, _ = gate.gated_run(REF_BASE, ROOT / "benchmarks" / "baselines" / "gate.json", estimator="wall")
+    row = next(r for r in s["benchmarks"] if r["name"] == "water_step")
+    assert row["regressed"] and "not in this clone" in row["reference_build"]["error"]
+
+
+def test_side_by_side_ratio_is_that_of_each_builds_fastest_process(monkeypatch):
+    """Noise only slows a process down: one slow process of either build does not move the ratio."""
+    times = iter([1.0, 1.0] + [1.0, 1.5, 1.6, 1.1, 1.0, 1.1])  # warm-up, then (ref, new) alternating order
+    monkeypatch.setattr(reference_build, "time_in", lambda root, kind, slowdown=None, rounds=0: next(times))
+    m = reference_build.measurement("water_step", ROOT, ROOT, pairs=3)
+    assert m["times"] == [(1.0, 1.5), (1.1, 1.6), (1.0, 1.1)]
+    assert m["ratio"] == 1.1 and m["pair_ratios"][0] == 1.5

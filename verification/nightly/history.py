@@ -61,6 +61,8 @@ def entry(meta, records, bench=None, wall_s=None):
     benchmarks = {}
     for b in (bench or {}).get("benchmarks", []):
         benchmarks[b["name"]] = {k: b.get(k) for k in ("ratio", "baseline_ratio", "threshold", "regressed")}
+        if "change" in b.get("reference_build", {}):  # the verdict of the side-by-side measurement
+            benchmarks[b["name"]]["reference_build"] = b["reference_build"]
     return {
         **meta,
         "nightly_wall_s": wall_s,
@@ -126,12 +128,13 @@ def flags(tonight, previous):
             )
     for name, b in tonight["benchmarks"].items():
         if b.get("regressed"):
-            out.append(
-                {
-                    "kind": "speed regression",
-                    "what": name,
-                    "why": f"speed ratio {b['ratio']:.4g} against baseline {b['baseline_ratio']:.4g}: "
-                    f"{b['ratio'] / b['baseline_ratio'] - 1:+.1%}, past the gate of +{b['threshold']:.1%}",
-                }
+            ref = b.get("reference_build")
+            why = (
+                f"{ref['change']:+.1%} against the build of {ref['commit'][:10]} timed side by side, "
+                f"past the gate of +{ref['threshold']:.1%}"
+                if ref
+                else f"speed ratio {b['ratio']:.4g} against baseline {b['baseline_ratio']:.4g}: "
+                f"{b['ratio'] / b['baseline_ratio'] - 1:+.1%}, past the gate of +{b['threshold']:.1%}"
             )
+            out.append({"kind": "speed regression", "what": name, "why": why})
     return out

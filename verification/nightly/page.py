@@ -161,6 +161,14 @@ def cost_section(name, rec, figure_png, planned):
     return "\n".join(parts)
 
 
+def side_by_side(b):
+    """The change against the baseline commit's build timed side by side, with its gate."""
+    ref = b.get("reference_build") or {}
+    if "change" in ref:
+        return f"{ref['change']:+.1%} (+{ref['threshold']:.1%})"
+    return f"not measured: {ref['error']}" if "error" in ref else "–"
+
+
 def bench_section(bench):
     if not bench:
         return (
@@ -185,6 +193,7 @@ def bench_section(bench):
                 b.get("baseline_ratio"),
                 f"{change:+.1%}" if change is not None else "–",
                 f"+{b['threshold']:.1%}" if b.get("threshold") is not None else "–",
+                side_by_side(b),
                 b.get("attempts", 1),
                 verdict if not b.get("skipped") else f"skipped: {b['skipped']}",
             ]
@@ -195,7 +204,9 @@ def bench_section(bench):
         f"{esc(bench.get('baseline_source', ''))}. The ratio divides a benchmark's time by the calibration "
         "kernel timed interleaved with it (benchmarks/calibration.py); the gate compares ratios, not "
         f"times (estimator: {esc(bench.get('estimator', '?'))}; docs/benchmarks.md). A benchmark past its "
-        "gate is measured again alone, up to twice (attempts), and fails only if every attempt is past.</p>"
+        "gate is measured again alone, up to twice (attempts), and fails only if every attempt is past. "
+        "The steps are also timed against the baseline commit's own build, alternating processes "
+        "(benchmarks/reference_build.py); where that was measured, it decides the verdict.</p>"
     )
     return head + table(
         [
@@ -208,6 +219,7 @@ def bench_section(bench):
             "baseline ratio",
             "change",
             "gate",
+            "against the baseline build (gate)",
             "attempts",
             "verdict",
         ],
