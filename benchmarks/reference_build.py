@@ -1,22 +1,28 @@
-"""The benchmark gate's second yardstick: the baseline commit's own build, timed side by side.
+"""The benchmark gate's second yardstick: the baseline commit's own build, timed call by call.
 
 The calibration kernel (calibration.py) cancels most of this host's speed changes, but not all:
 for minutes at a time the host enters a slow phase in which the solver's steps lose 15-25 %
 against the kernel (the nightly of 2026-12-02 00:03 UTC measured water +13 %, soil +17 %,
-two-phase +9 % in all three attempts of an unchanged build; docs/benchmarks.md). Whatever slows
-the solver's step slows the same step of the baseline commit as much, so the gate times each step
-benchmark in both builds, alternating processes every few seconds, and compares the ratio
-current / baseline build. The baseline build is the commit recorded in baselines/gate.json,
-exported once with `git archive` into runs/bench/reference/<commit> (no solver code of the current
-tree is imported there: each side runs its own `solver` and its own benchmark set-up).
+two-phase +9 % in all three attempts of an unchanged build; docs/benchmarks.md). What is slow is
+a vCPU: the two vCPUs of this guest run at different speeds that change from minute to minute.
+Two processes of the same build taking turns call by call differ by up to 37 % when each is on its
+own vCPU, and by about 1 % when both are pinned to one (docs/benchmarks.md). So the gate runs
+each step benchmark in two processes, one per build, pinned to the same core, and has them take
+turns: one timed call of the baseline build, one of the current build, and so on, a few
+milliseconds apart, so that both see the same core in the same state. The ratio of a round is
+current / baseline; a measurement is the median over PAIRS process pairs of each pair's median. The
+baseline build is the commit recorded in baselines/gate.json, exported once with `git archive`
+into runs/bench/reference/<commit>; each process imports its own `solver` and its own benchmark
+set-up.
 
-    python benchmarks/reference_build.py water [--pairs 4]      one A/B measurement, printed
+    python benchmarks/reference_build.py water_step [--pairs 3] [--slowdown 0.1]
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import subprocess
 import sys
 import tarfile
@@ -26,8 +32,8 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 TREES = ROOT / "runs" / "bench" / "reference"
-PAIRS = 6  # A/B pairs per measurement, each side in its own process, order alternated (ABBA)
-ROUNDS = 150  # timed calls per process; a call is 1-4 ms, so a process lives ~3 s
+PAIRS = 3  # process pairs per measurement
+ROUNDS = 200  # alternating timed calls per pair; a call is 1-4 ms
 
 # gate benchmark -> the child's build of it (the same scenes and sizes as bench_gate.py)
 KINDS = {
@@ -37,9 +43,12 @@ KINDS = {
     "neighbour_rebuild": "rebuild",
 }
 
+# One build's side, pinned to the given core: set up, warm up, then one timed call per line read
+# from stdin, its CPU time written back. The wait for the next line is outside the timing.
 CHILD = """
 import os, sys, time
-root, kind, rounds = sys.argv[1], sys.argv[2], int(sys.argv[3])
+root, kind, cpu = sys.argv[1], sys.argv[2], int(sys.argv[3])
+os.sched_setaffinity(0, {cpu})
 sys.path[:0] = [root, root + "/benchmarks"]
 import numba
 numba.set_num_threads(1)
@@ -54,16 +63,18 @@ else:
     from saturated_bed_setup import saturated_bed
     sim = saturated_bed(3_750)
 target, before = (sim.rebuild, sim.step) if kind == "rebuild" else (sim.step, None)
-best = float("inf")
-for k in range(rounds + 3):
+for _ in range(3):
+    if before is not None:
+        before()
+    target()
+print("ready", flush=True)
+for line in sys.stdin:
     if before is not None:
         before()
     t0, c0 = time.perf_counter(), time.process_time()
     target()
     spin_after(t0, c0)
-    if k >= 3:
-        best = min(best, time.process_time() - c0)
-print(best, sim.particles.n_owned)
+    print(time.process_time() - c0, flush=True)
 """
 
 
@@ -90,50 +101,66 @@ def reference_tree(commit):
     return tree
 
 
-def time_in(root, kind, slowdown=None, rounds=ROUNDS):
-    """CPU time of the fastest of `rounds` calls of the benchmark in a fresh process of `root`."""
+def _start(root, kind, cpu, slowdown=None):
     env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1")
     env.pop("SCOURSPH_BENCH_SLOWDOWN", None)
     if slowdown:
         env["SCOURSPH_BENCH_SLOWDOWN"] = str(slowdown)
-    out = subprocess.run(
-        [sys.executable, "-c", CHILD, str(root), kind, str(rounds)], env=env, capture_output=True, text=True
+    return subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(root), kind, str(cpu)],
+        env=env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        bufsize=1,
     )
-    if out.returncode:
-        raise RuntimeError(f"{kind} in {root}: {out.stderr.strip().splitlines()[-1:]}")
-    return float(out.stdout.split()[0])
 
 
-def ab_times(name, reference, current=ROOT, slowdown=None, pairs=PAIRS):
-    """CPU times (reference, current) of gate benchmark `name`, one process each, `pairs` times;
-    the order of the two processes alternates from pair to pair so that a drift of the host's
-    speed cancels."""
+def _ready(proc, root, kind):
+    line = proc.stdout.readline()
+    if line.strip() != "ready":
+        err = proc.stderr.read().strip().splitlines()[-1:]
+        raise RuntimeError(f"{kind} benchmark in {root} did not start: {err}")
+
+
+def _call(proc):
+    proc.stdin.write("go\n")
+    return float(proc.stdout.readline())
+
+
+def alternating_times(name, reference, current=ROOT, slowdown=None, rounds=ROUNDS):
+    """[(reference, current)] CPU time of one call per round, the two processes taking turns (the
+    order alternating from round to round)."""
     kind = KINDS[name]
-    for root in (reference, current):  # compile or load each build's Numba cache outside the timing
-        time_in(root, kind, rounds=1)
-    out = []
-    for k in range(pairs):
-        if k % 2 == 0:
-            ref = time_in(reference, kind)
-            new = time_in(current, kind, slowdown)
-        else:
-            new = time_in(current, kind, slowdown)
-            ref = time_in(reference, kind)
-        out.append((ref, new))
-    return out
+    cpu = max(os.sched_getaffinity(0))  # both on one core: this host's two vCPUs differ in speed
+    ref, new = _start(reference, kind, cpu), _start(current, kind, cpu, slowdown)
+    try:
+        _ready(ref, reference, kind)
+        _ready(new, current, kind)
+        out = []
+        for k in range(rounds):
+            if k % 2 == 0:
+                r = _call(ref)
+                n = _call(new)
+            else:
+                n = _call(new)
+                r = _call(ref)
+            out.append((r, n))
+        return out
+    finally:
+        for p in (ref, new):
+            p.stdin.close()
+            p.wait()
 
 
 def measurement(name, reference, current=ROOT, slowdown=None, pairs=PAIRS):
-    """One A/B measurement of a gate benchmark: `ratio`, the current build's fastest process over
-    the reference build's fastest; the per-pair ratios beside it. The host's noise only ever slows
-    a process down (a whole process of 1-2 s can run 20 % slow: the A/A pairs of the soil step
-    ranged 0.78-1.02), so each build's fastest process is its undisturbed cost."""
-    times = ab_times(name, reference, current, slowdown, pairs)
-    return {
-        "ratio": min(n for _, n in times) / min(r for r, _ in times),
-        "pair_ratios": [n / r for r, n in times],
-        "times": times,
-    }
+    """One side-by-side measurement of a gate benchmark: per process pair the median over its
+    rounds of current / reference, and `ratio`, the median over the pairs (a pair now and then
+    reads 5-10 % off for its whole life, so pairs are the independent draws, not rounds)."""
+    rounds = [alternating_times(name, reference, current, slowdown) for _ in range(pairs)]
+    per_pair = [statistics.median(n / r for r, n in pair) for pair in rounds]
+    return {"ratio": statistics.median(per_pair), "pair_ratios": per_pair}
 
 
 def main(argv=None):
