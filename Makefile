@@ -44,9 +44,11 @@ bench: $(STAMP)
 bench-check: $(STAMP)
 	$(BIN)/python benchmarks/gate.py check --json $(NIGHTLY)/bench-latest.json
 
-## make bench-baseline: re-measure the gate's baseline and thresholds (10 runs of the gate suite)
+## make bench-baseline: re-measure the gate's baseline and thresholds (10 runs of the gate suite), then
+## the spread of the side-by-side timing against the new baseline commit's build (10 runs)
 bench-baseline: $(STAMP)
 	$(BIN)/python benchmarks/gate.py baseline --runs 10
+	$(BIN)/python benchmarks/gate.py reference-baseline --runs 10
 
 ## make nightly: the benchmark gate, then every verification case and its study (scoursph report):
 ## $(NIGHTLY)/<date>/index.html and results.json, $(NIGHTLY)/latest; exit 1 on a failure or regression

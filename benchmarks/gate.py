@@ -5,6 +5,7 @@
     python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
     python benchmarks/gate.py loo [--from-raw FILE]         each baseline run judged by the others
     python benchmarks/gate.py reference-baseline [--runs 10]   spread of the side-by-side timing
+    python benchmarks/gate.py repeat --side-by-side [--runs 10] [--slowdown 0.10]   its own test
 
 `check` runs benchmarks/bench_gate.py under pytest-benchmark in PROCESSES processes, one after
 the other, and keeps each benchmark's lowest ratio (its time / the calibration kernel's, measured
@@ -559,11 +560,50 @@ def cmd_loo(args):
     return 0
 
 
+def repeat_side_by_side(args, baseline):
+    """The side-by-side verdict alone, RUNS times: each step benchmark against the baseline build."""
+    reference = baseline.get("reference_build")
+    if reference is None:
+        print(
+            "the baseline has no side-by-side thresholds: run `python benchmarks/gate.py reference-baseline`"
+        )
+        return 2
+    tree = reference_build.reference_tree(reference["commit"])
+    per, flagged_runs = {}, 0
+    for k in range(args.runs):
+        flagged = []
+        for name, b in reference["benchmarks"].items():
+            if args.k and args.k not in name:
+                continue
+            m = reference_build.measurement(name, tree, slowdown=args.slowdown, pairs=reference["pairs"])
+            change = m["ratio"] - 1
+            per.setdefault(name, []).append((change, change > b["threshold"]))
+            if change > b["threshold"]:
+                flagged.append(name)
+        flagged_runs += bool(flagged)
+        print(
+            f"run {k + 1}/{args.runs} side by side (slowdown {args.slowdown or 0:g}, load "
+            f"{os.getloadavg()[0]:.2f}): "
+            + ", ".join(f"{n} {v[-1][0]:+.1%}{'!' if v[-1][1] else ''}" for n, v in per.items()),
+            flush=True,
+        )
+    print(f"{flagged_runs} of {args.runs} runs flagged a regression (slowdown {args.slowdown or 0:g})")
+    for name, v in per.items():
+        gate = reference["benchmarks"][name]["threshold"]
+        print(
+            f"  {name:20s} flagged {sum(f for _, f in v)}/{len(v)} (gate +{gate:.1%}), change min "
+            f"{min(c for c, _ in v):+.1%} max {max(c for c, _ in v):+.1%}"
+        )
+    return 0
+
+
 def cmd_repeat(args):
     baseline = load_baseline(args.baseline)
     if baseline is None:
         print(f"no baseline at {args.baseline}: run `python benchmarks/gate.py baseline` first")
         return 2
+    if args.side_by_side:
+        return repeat_side_by_side(args, baseline)
     results = []
     for k in range(args.runs):
         s, _ = gated_run(baseline, Path(args.baseline), args.slowdown, args.k, args.estimator)
@@ -637,6 +677,11 @@ def main(argv=None):
             p.add_argument("--from-raw", help=f"recompute from saved raw runs (e.g. {RAW.relative_to(ROOT)})")
         if name == "repeat":
             p.add_argument("--out", help="write every run's summary here (JSON)")
+            p.add_argument(
+                "--side-by-side",
+                action="store_true",
+                help="only the step benchmarks against the baseline build (what decides their verdict)",
+            )
     args = ap.parse_args(argv)
     commands = {
         "check": cmd_check,
