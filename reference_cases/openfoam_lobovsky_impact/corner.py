@@ -2,7 +2,8 @@
 between the floor and the far wall over the plateau window (t* 3-5.5), from the fields written every
 0.05 s into work/ (not in git: rerun with run.py to get them).
 
-    python -m reference_cases.openfoam_lobovsky_impact.corner [LABEL ...] [--png PATH] [--md PATH]
+    python -m reference_cases.openfoam_lobovsky_impact.corner [LABEL ...] [--sph NAME=RUN.npz ...]
+        [--png PATH] [--md PATH]
 
 Per run (default: h20, h40, h60 with noSlip and slip walls), time means over the written fields in
 the window:
@@ -15,7 +16,9 @@ the window:
   * the first cell's wall shear mu u_1 / (dy / 2) at x = 1.3 m (Pa), what the viscous wall term of
     the solver exerts, against rho g H = 2943 Pa.
 The figure: streamlines of the window-mean velocity in the corner (x 1.41-1.61 m, y 0-0.2 m), the
-window-mean alpha = 0.5 contour, one panel per run.
+window-mean alpha = 0.5 contour, one panel per run. --sph adds SPH runs recorded by
+verification/impact_study/fields.py (its corner bins: 10 mm; backflow and downflow as above, from
+the particles, every 1 ms; no head or shear columns).
 """
 
 from __future__ import annotations
@@ -42,8 +45,8 @@ def cells_per_h(label: str) -> int:
     return int(label.split("_")[0][1:])
 
 
-def grid_fields(label: str, case: Path | None = None, n_per_h: int | None = None) -> dict:
-    """The run's fields in the plateau window on the downstream block's uniform grid:
+def grid_fields(label: str, case: Path | None = None, n_per_h: int | None = None, window=R.PLATEAU) -> dict:
+    """The run's fields in the t* window (default the plateau's) on the downstream block's uniform grid:
     {"x", "y", "t", "u", "v", "p", "alpha"}, arrays [time, ix, iy] (cells with x > XC)."""
     case = case or R.WORK_DIR / label
     n_per_h = n_per_h or cells_per_h(label)
@@ -57,7 +60,7 @@ def grid_fields(label: str, case: Path | None = None, n_per_h: int | None = None
     iy = np.searchsorted(ys, np.round(c[down, 1], 9))
     out = {"x": xs, "y": ys, "t": [], "u": [], "v": [], "p": [], "alpha": [], "dy": m["dy"]}
     for t, d in time_dirs(case):
-        if not R.PLATEAU[0] <= t / R.TIME_SCALE <= R.PLATEAU[1] or not (d / "U").is_file():
+        if not window[0] <= t / R.TIME_SCALE <= window[1] or not (d / "U").is_file():
             continue
         U = read_internal_field(d / "U", n)[down]
         vals = {
@@ -113,12 +116,83 @@ def table(rows: dict) -> list[str]:
         "|---|---|---|---|---|---|---|",
     ]
     for label, m in rows.items():
+        if "reversed_fraction" not in m:  # an SPH record
+            lines.append(f"| {label} | {m['backflow_u']:+.2f} | | {m['downflow_v']:+.2f} | | | |")
+            continue
         lines.append(
             f"| {label} | {m['backflow_u']:+.2f} | {m['reversed_fraction']:.2f} | {m['downflow_v']:+.2f} "
             f"| {m['u1_1.30']:.2f} / {m['u1_1.45']:.2f} | {m['head_1.30']:.3f} / {m['head_1.45']:.3f} "
             f"| {m['wall_shear_Pa']:.2f} |"
         )
     return lines
+
+
+def sph_corner(path: Path) -> tuple[dict, dict]:
+    """(grid fields, metrics) of an SPH record of verification/impact_study/fields.py: mean u, v per
+    10 mm bin over the window (momentum / mass), alpha = 1 where water was found in every record."""
+    d = np.load(path)
+    xs = 0.5 * (d["corner_x"][1:] + d["corner_x"][:-1])
+    ys = 0.5 * (d["corner_y"][1:] + d["corner_y"][:-1])
+    mass = d["corner_mass"]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u, v = d["corner_mom"][0] / mass, d["corner_mom"][1] / mass
+    ts = d["t_star"]
+    w = (ts >= R.PLATEAU[0]) & (ts <= R.PLATEAU[1])
+    # the bins' share of the densest bin's mass: a water fraction for the alpha = 0.5 contour
+    alpha = np.clip(mass / np.nanmax(mass), 0.0, 1.0)
+    f = {"x": xs, "y": ys, "u": u[None], "v": v[None], "alpha": alpha[None]}
+    m = {
+        "backflow_u": float(np.nanmean(d["backflow"][w])),
+        "downflow_v": float(np.nanmean(d["downflow"][w])),
+    }
+    return f, m
+
+
+def backflow_series(label: str, window=(2.3, R.T_END_STAR)) -> tuple[np.ndarray, np.ndarray]:
+    """(t*, backflow u) at every written field from the impact on: when the corner flow reverses."""
+    f = grid_fields(label, window=window)
+    x, y = f["x"], f["y"]
+    s = (x[:, None] > R.LX - BACKFLOW_BOX[0]) & (y[None, :] < BACKFLOW_BOX[1])
+    a = f["alpha"][:, s]
+    return f["t"] / R.TIME_SCALE, np.sum(a * f["u"][:, s], axis=1) / np.maximum(a.sum(axis=1), 1e-12)
+
+
+def plot_series(labels: list[str], path: Path) -> Path:
+    """Backflow u against time (fields every 0.05 s) and sensor 2 (every step, 1 ms filter) of the
+    interFoam runs, with the experiment's band at sensor 2."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from verification import impact_pressure as ip
+
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    _, band, _ = ip.experiment()
+    bt, lo, med, hi = band
+    a2.fill_between(bt, lo, hi, color="0.85", label="experiment: 2.5-97.5 % of 100 repetitions")
+    a2.plot(bt, med, color="0.5", lw=0.8, label="experiment: median")
+    for k, label in enumerate(labels):
+        style = {"color": f"C{k % 3}", "ls": "-" if "slip" not in label else "--"}
+        t, b = backflow_series(label)
+        a1.plot(t, b, marker="o", ms=3, label=f"interFoam {label}", **style)
+        d = R.read_sensors(R.DATA_DIR / f"openfoam_{label}_sensors.csv")
+        g, f, _ = ip.filtered(d["t_star"], d["p_star"][:, 1])
+        a2.plot(g, f, lw=0.9, label=f"interFoam {label}", **style)
+    a1.axhline(0.0, color="k", lw=0.6)
+    a1.set_ylabel("mean u, x > 1.56 m, y < 20 mm (m/s)")
+    a1.set_title("Corner flow at the foot of the far wall: toward the wall (> 0) or back (< 0, separated)")
+    a1.legend(fontsize=7, ncol=2)
+    a2.set_ylabel("p / (rho g H), sensor 2 (1 ms filter)")
+    a2.set_xlabel("t sqrt(g/H)")
+    a2.set_xlim(2.3, R.T_END_STAR)
+    a2.set_ylim(0.0, 2.0)
+    a2.axvspan(*R.PLATEAU, color="C4", alpha=0.06)
+    a2.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def plot(fields: dict, path: Path) -> Path:
@@ -128,15 +202,16 @@ def plot(fields: dict, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     labels = list(fields)
-    ncol = (len(labels) + 1) // 2 if len(labels) > 1 else 1
-    fig, axes = plt.subplots(2 if len(labels) > 1 else 1, ncol, figsize=(4.2 * ncol, 7.6), squeeze=False)
+    ncol = min(3, len(labels))
+    nrow = -(-len(labels) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.8 * nrow), squeeze=False)
     for ax, label in zip(axes.flat, labels):
         f = fields[label]
         x, y = f["x"], f["y"]
         sx, sy = x > 1.40, y < 0.21
-        u = np.nanmean(f["u"], axis=0)[np.ix_(sx, sy)].T
-        v = np.nanmean(f["v"], axis=0)[np.ix_(sx, sy)].T
-        a = np.nanmean(f["alpha"], axis=0)[np.ix_(sx, sy)].T
+        u = np.nan_to_num(np.nanmean(f["u"], axis=0)[np.ix_(sx, sy)].T)
+        v = np.nan_to_num(np.nanmean(f["v"], axis=0)[np.ix_(sx, sy)].T)
+        a = np.nan_to_num(np.nanmean(f["alpha"], axis=0)[np.ix_(sx, sy)].T)
         speed = np.hypot(u, v)
         ax.streamplot(x[sx], y[sy], np.where(a > 0.5, u, 0), np.where(a > 0.5, v, 0), color=speed,
                       cmap="viridis", density=1.4, linewidth=0.7, arrowsize=0.7)  # fmt: skip
@@ -146,13 +221,14 @@ def plot(fields: dict, path: Path) -> Path:
         ax.set_xlim(1.40, R.LX)
         ax.set_ylim(0.0, 0.2)
         ax.set_aspect("equal")
-        ax.set_title(f"interFoam {label}: mean over t* 3-5.5", fontsize=9)
+        ax.set_title(f"{label}: mean over t* 3-5.5", fontsize=9)
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
     for ax in list(axes.flat)[len(labels) :]:
         ax.axis("off")
-    fig.suptitle("Corner of the far wall: no-slip (top) against slip walls (bottom); "
-                 "red: alpha = 0.5, triangles: sensors 1-3", fontsize=10)  # fmt: skip
+    fig.suptitle("Corner of the far wall, window-mean flow (interFoam runs by label, SPH runs named); "
+                 "red: alpha = 0.5 (SPH: half the densest bin's mass), triangles: sensors 1-3",
+                 fontsize=9)  # fmt: skip
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -163,6 +239,9 @@ def plot(fields: dict, path: Path) -> Path:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("labels", nargs="*", default=list(DEFAULT))
+    p.add_argument(
+        "--sph", action="append", default=[], help="NAME=RUN.npz (verification/impact_study/fields.py)"
+    )
     p.add_argument("--png", type=Path, default=R.DATA_DIR / "corner.png")
     p.add_argument("--md", type=Path, default=R.DATA_DIR / "corner.md")
     a = p.parse_args(argv)
@@ -173,11 +252,20 @@ def main(argv=None) -> int:
             return 2
         fields[label] = grid_fields(label)
         rows[label] = corner_metrics(fields[label])
+    for spec in a.sph:
+        name, _, path = spec.partition("=")
+        if not path or not Path(path).is_file():
+            print(f"--sph {spec}: expected NAME=RUN.npz of an existing file", file=sys.stderr)
+            return 2
+        fields[name], rows[name] = sph_corner(Path(path))
     lines = table(rows)
     print("\n".join(lines))
     title = "# interFoam, corner of the far wall over t* 3-5.5 (corner.py)\n\n"
     a.md.write_text(title + "\n".join(lines) + "\n")
     print(plot(fields, a.png))
+    foam = [label for label in a.labels if (R.DATA_DIR / f"openfoam_{label}_sensors.csv").is_file()]
+    if foam:
+        print(plot_series(foam, a.png.with_name(a.png.stem + "_series.png")))
     return 0
 
 
