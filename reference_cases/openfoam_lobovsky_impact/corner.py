@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -79,8 +80,9 @@ def grid_fields(label: str, case: Path | None = None, n_per_h: int | None = None
     return out
 
 
-def corner_metrics(f: dict) -> dict:
-    """The module doc's numbers from grid_fields(), means over the window's fields."""
+def corner_metrics(f: dict, mu: float = MU) -> dict:
+    """The module doc's numbers from grid_fields(), means over the window's fields (mu: the water's
+    dynamic viscosity of the run, for the first-cell shear)."""
     x, y, a = f["x"], f["y"], f["alpha"]
     wall = R.LX
 
@@ -104,15 +106,31 @@ def corner_metrics(f: dict) -> dict:
         out[f"head_{x0:.2f}"] = float(np.mean(head))
         out[f"u1_{x0:.2f}"] = float(np.mean(u))
     i = int(np.argmin(np.abs(x - X_HEAD[0])))
-    out["wall_shear_Pa"] = float(np.mean(MU * np.abs(f["u"][:, i, 0]) / (0.5 * f["dy"])))
+    out["wall_shear_Pa"] = float(np.mean(mu * np.abs(f["u"][:, i, 0]) / (0.5 * f["dy"])))
     return out
+
+
+def scheme_drag(label: str, window=(2.8, 3.2), x_range=(1.46, 1.59)) -> dict:
+    """What a no-slip wall value would take out of the first cell row through linearUpwind grad(U), on a
+    run's fields before the separation: where the flow lifts off the floor (v_f > 0 on the row's top
+    face), the Gauss gradient with the wall value 0 instead of the cell's own u_1 raises the top face's
+    extrapolated u by u_1 / 2, so the row exports an extra v_f u_1 / 2 of momentum per unit wall area:
+    a deceleration v_f u_1 / (2 dy) of the row and an equivalent wall traction rho v_f u_1 / 2 (means
+    over x_range and the window's fields)."""
+    f = grid_fields(label, window=window)
+    s = (f["x"] > x_range[0]) & (f["x"] < x_range[1])
+    u1 = f["u"][:, s, 0]
+    vf = 0.5 * (f["v"][:, s, 0] + f["v"][:, s, 1])
+    extra = np.where(vf > 0, vf * u1 / 2, 0.0)
+    return {"traction_Pa": float(R.RHO_W * extra.mean()), "deceleration": float((extra / f["dy"]).mean())}
 
 
 def table(rows: dict) -> list[str]:
     lines = [
         "| run | backflow u, x > 1.56 m, y < 20 mm (m/s) | share of those cells with u < 0 "
         "| downflow v, x > 1.59 m, y < 50 mm (m/s) | first-row u at 1.30 / 1.45 m (m/s) "
-        "| first-row total head at 1.30 / 1.45 m (rho g H) | first-cell wall shear at 1.30 m (Pa) |",
+        "| first-row total head at 1.30 / 1.45 m (rho g H) "
+        "| mu u_1 / (dy/2) at 1.30 m (Pa; applied with noSlip only) |",
         "|---|---|---|---|---|---|---|",
     ]
     for label, m in rows.items():
@@ -129,7 +147,7 @@ def table(rows: dict) -> list[str]:
 
 def sph_corner(path: Path) -> tuple[dict, dict]:
     """(grid fields, metrics) of an SPH record of verification/impact_study/fields.py: mean u, v per
-    10 mm bin over the window (momentum / mass), alpha = 1 where water was found in every record."""
+    10 mm bin over the window (momentum / mass), alpha = the bin's mean water mass / (rho0 x its area)."""
     d = np.load(path)
     xs = 0.5 * (d["corner_x"][1:] + d["corner_x"][:-1])
     ys = 0.5 * (d["corner_y"][1:] + d["corner_y"][:-1])
@@ -138,8 +156,8 @@ def sph_corner(path: Path) -> tuple[dict, dict]:
         u, v = d["corner_mom"][0] / mass, d["corner_mom"][1] / mass
     ts = d["t_star"]
     w = (ts >= R.PLATEAU[0]) & (ts <= R.PLATEAU[1])
-    # the bins' share of the densest bin's mass: a water fraction for the alpha = 0.5 contour
-    alpha = np.clip(mass / np.nanmax(mass), 0.0, 1.0)
+    area = np.diff(d["corner_x"])[:, None] * np.diff(d["corner_y"])[None, :]
+    alpha = np.clip(mass / (R.RHO_W * area * max(int(w.sum()), 1)), 0.0, 1.0)  # records in the window
     f = {"x": xs, "y": ys, "u": u[None], "v": v[None], "alpha": alpha[None]}
     m = {
         "backflow_u": float(np.nanmean(d["backflow"][w])),
@@ -209,9 +227,11 @@ def plot(fields: dict, path: Path) -> Path:
         f = fields[label]
         x, y = f["x"], f["y"]
         sx, sy = x > 1.40, y < 0.21
-        u = np.nan_to_num(np.nanmean(f["u"], axis=0)[np.ix_(sx, sy)].T)
-        v = np.nan_to_num(np.nanmean(f["v"], axis=0)[np.ix_(sx, sy)].T)
-        a = np.nan_to_num(np.nanmean(f["alpha"], axis=0)[np.ix_(sx, sy)].T)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # empty SPH bins: no flow drawn there
+            u = np.nan_to_num(np.nanmean(f["u"], axis=0)[np.ix_(sx, sy)].T)
+            v = np.nan_to_num(np.nanmean(f["v"], axis=0)[np.ix_(sx, sy)].T)
+            a = np.nan_to_num(np.nanmean(f["alpha"], axis=0)[np.ix_(sx, sy)].T)
         speed = np.hypot(u, v)
         ax.streamplot(x[sx], y[sy], np.where(a > 0.5, u, 0), np.where(a > 0.5, v, 0), color=speed,
                       cmap="viridis", density=1.4, linewidth=0.7, arrowsize=0.7)  # fmt: skip
@@ -227,7 +247,7 @@ def plot(fields: dict, path: Path) -> Path:
     for ax in list(axes.flat)[len(labels) :]:
         ax.axis("off")
     fig.suptitle("Corner of the far wall, window-mean flow (interFoam runs by label, SPH runs named); "
-                 "red: alpha = 0.5 (SPH: half the densest bin's mass), triangles: sensors 1-3",
+                 "red: alpha = 0.5 (SPH: water mass per bin), triangles: sensors 1-3",
                  fontsize=9)  # fmt: skip
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -259,6 +279,15 @@ def main(argv=None) -> int:
             return 2
         fields[name], rows[name] = sph_corner(Path(path))
     lines = table(rows)
+    slip = [label for label in a.labels if label.endswith("_slip")]
+    if slip:
+        lines += ["", "linearUpwind's wall-value drag on the first cell row, estimated on the slip runs' "
+                  "fields at t* 2.8-3.2, x 1.46-1.59 m (scheme_drag):", "",
+                  "| run | equivalent wall traction rho v_f u_1 / 2 (Pa) | row deceleration (m/s^2) |",
+                  "|---|---|---|"]  # fmt: skip
+        for label in slip:
+            d = scheme_drag(label)
+            lines.append(f"| {label} | {d['traction_Pa']:.0f} | {d['deceleration']:.1f} |")
     print("\n".join(lines))
     title = "# interFoam, corner of the far wall over t* 3-5.5 (corner.py)\n\n"
     a.md.write_text(title + "\n".join(lines) + "\n")

@@ -66,7 +66,7 @@ def run_variant(n: int, walls: str, nu: float, div_u: str) -> dict:
     C.run(["postProcess", "-func", "writeCellCentres", "-time", "0"], work, logs / "cc.log", R.FOAM_ENV)
     red = R.reduce_probes(work, n)
     m = R.impact_metrics(red["t"] / R.TIME_SCALE, red["p_star"])
-    cm = corner.corner_metrics(corner.grid_fields(label, work, n))
+    cm = corner.corner_metrics(corner.grid_fields(label, work, n), mu=nu * R.RHO_W)
     row = {
         "label": label,
         "cells_per_H": n,
@@ -78,7 +78,7 @@ def run_variant(n: int, walls: str, nu: float, div_u: str) -> dict:
         "cpu_s": round(
             cpu1.children_user - cpu0.children_user + cpu1.children_system - cpu0.children_system, 1
         ),  # fmt: skip
-        "load": os.getloadavg()[0],
+        "load": round(os.getloadavg()[0], 2),
         "command": "python -m reference_cases.openfoam_lobovsky_impact.variants "
         + shlex.join(["--cells-per-H", str(n), "--walls", walls, "--nu-water", f"{nu:g}", "--div-U", div_u]),
     }
