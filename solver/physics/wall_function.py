@@ -141,7 +141,7 @@ class WallFunctionShear(Term):
         )
         self.y_min = 0.5 * scene.scene.spacing
         self.table = wall_weight_table(scene.h, scene.dim)
-        self.reads = ("x", "v")
+        self.reads = ()  # owned rows only: no halo or image refresh needed
         self.adds_to = ("acc",)
         self.equations = (
             Equation(
