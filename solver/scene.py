@@ -55,7 +55,7 @@ MAX_STEPS = 1_000_000_000  # a-priori steps: 4.6 days for 1000 particles at 2.5 
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
-WallKind = Literal["free_slip", "no_slip", "frictional"]
+WallKind = Literal["free_slip", "no_slip", "frictional", "wall_function"]
 OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
 # what a picture (output.render_field) can colour by -> the output field it needs (None: always written)
 RENDER_FIELDS = {

@@ -18,7 +18,9 @@ import pytest
 from reference_cases.liggghts_column_collapse_2d import calibrate as dem_cal
 from reference_cases.liggghts_column_collapse_2d import run as dem
 from reference_cases.openfoam_dam_break_2d import run as cfd
+from reference_cases.openfoam_lobovsky_impact import corner as lobo_corner
 from reference_cases.openfoam_lobovsky_impact import run as lobo
+from reference_cases.openfoam_lobovsky_impact import variants as lobo_variants
 from reference_cases.openfoam_overflow_nappe import run as nappe
 from reference_cases.openfoam_seepage_2d import run as seep
 
@@ -142,6 +144,32 @@ def test_openfoam_lobovsky_tiny_physics(tiny_lobovsky):
     assert s["wall_depth"][-1] > 0.05
     # MULES keeps the water area to solver tolerance (measured 1.8e-6 at H/8); allow 1e-4
     assert e["water_area_max_rel_change"] < 1e-4
+
+
+@pytest.mark.reference_tools
+def test_openfoam_lobovsky_tiny_corner(tiny_lobovsky):
+    """corner.py on the tiny run's fields (t* to 2.9: after the impact, before the plateau window)."""
+    window = (2.3, 3.0)
+    f = lobo_corner.grid_fields("h8_tiny", tiny_lobovsky["work"], 8, window=window)
+    assert len(f["t"]) >= 1 and f["u"].shape == (len(f["t"]), len(f["x"]), len(f["y"]))
+    assert np.all(f["x"] > lobo.XC) and np.all(np.isfinite(f["u"]))
+    m = lobo_corner.corner_metrics(f)
+    assert all(np.isfinite(v) for v in m.values())
+    assert 0.0 <= m["reversed_fraction"] <= 1.0 and abs(m["backflow_u"]) < 5.0
+    d = lobo_corner.scheme_drag("h8_tiny", window=window)
+    assert d["traction_Pa"] >= 0.0 and d["deceleration"] >= 0.0
+
+
+def test_lobovsky_variant_edits_one_thing(tmp_path):
+    """variants.py changes the water's nu or the momentum convection scheme, nothing else."""
+    work = tmp_path / "v"
+    lobo_variants.write_variant(work, 8, "noSlip", 1e-8, "Gauss upwind")
+    tp = (work / "constant" / "transportProperties").read_text()
+    assert "nu              1e-08;" in tp and "nu              1.48e-05;" in tp  # water changed, air not
+    fs = (work / "system" / "fvSchemes").read_text()
+    assert "div(rhoPhi,U)   Gauss upwind;" in fs and "linearUpwind" not in fs
+    assert lobo_variants.label_of(8, "noSlip", 1e-8, "Gauss upwind") == "h8_var_noSlip_nu1e-08_upwind"
+    assert lobo_variants.label_of(20, "slip", 1e-6, lobo_variants.DEFAULT_DIV_U) == "h20_var_slip_nu1e-06"
 
 
 # ----------------------------------------------------------------------------- OpenFOAM seepage

@@ -165,12 +165,13 @@ def test_impact_plateau_noise_at_ci_resolution(impact_ci):
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="known limitation of the free-slip walls: the 2D SPH plateau pressure at sensor 2 lies above the "
-    "repetitions' band (mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and "
-    "half-width 0.12), as 2D interFoam with the same free-slip walls does "
-    "(0.93 / 0.92 / 0.93 at H/20 / H/40 / H/60); "
-    "interFoam with no-slip walls lies inside the band (0.61 / 0.59 / 0.58 at H/20 / H/40 / H/60) "
-    "(reference_cases/openfoam_lobovsky_impact/README.md); kept visible",
+    reason="no corner separation: the 2D SPH plateau pressure at sensor 2 lies above the repetitions' band "
+    "(mean p* 0.82 / 0.85 / 0.90 at H/20 / H/40 / H/80 against the band's median 0.61 and half-width 0.12), "
+    "with the unseparated stagnation corner that 2D interFoam with slip walls also has "
+    "(0.93 / 0.92 / 0.93 at H/20 / H/40 / H/60); the experiment's flat plateau is that of a separated "
+    "corner eddy, which interFoam's no-slip runs form through their convection scheme (0.61 / 0.59 / 0.58) "
+    "and the SPH does not form with no-slip or log-law wall-function walls either "
+    "(verification/results/impact_pressure/README.md, 'What sets the plateau'); kept visible",
 )
 def test_impact_plateau_mean_at_ci_resolution(impact_ci):
     check = next(c for c in impact_ci.checks if c.metric == PLATEAU_MEAN)

@@ -40,10 +40,14 @@ Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
      What the reference showed (2026-12-01): with free-slip walls interFoam gives 0.926 / 0.923 /
      0.925 at H/20 / H/40 / H/60 (+0.31 above the band median, the SPH's wall-pressure profile and
      2.5-2.7 rho g gradient); with no-slip walls 0.614 / 0.590 / 0.579 at H/20 / H/40 / H/60, inside
-     the band. The plateau-mean miss (check 2) is the free-slip wall condition of this 2D model, not the 2D
-     idealisation and not an SPH error. SPH converges toward the free-slip answer from below (-0.11 /
-     -0.07 / -0.03 at H/20 / H/40 / H/80); its H/20 error exceeds the first-order allowance e there
-     (check 2b: a known failure).
+     the band. What the no-slip wall changes there is a separated eddy in the corner at the wall's foot
+     (2026-12-02, reference README): the experiment's flat plateau and flat wall profile have that shape;
+     interFoam starts the eddy through linearUpwind's wall-value gradient, not through viscosity (water nu
+     1e-8: unchanged; first-order upwind: no eddy, 0.937). SPH with free-slip, no-slip or log-law
+     wall-function walls ("wall_function") keeps the unseparated stagnation corner at these particle
+     sizes: the plateau-mean miss (check 2) is that missing separation. SPH converges toward the
+     free-slip answer from below (-0.11 / -0.07 / -0.03 at H/20 / H/40 / H/80); its H/20 error exceeds
+     the first-order allowance e there (check 2b: a known failure).
   3. plateau noise: standard deviation of p* at sensor 2 over the window after the acoustic
      filter below, against the spread between repetitions (the band half-width, 0.115) + e: the
      swings the issue found (-3 to +4 rho g H with the seed's scheme) must stay inside what
@@ -123,12 +127,14 @@ PLATEAU_MEAN_2D = "plateau mean p* at sensor 2, t* 3-5.5, minus 2D interFoam wit
 # Checks expected to fail until the model changes (the nightly report shows them as known failures and
 # flags them if they pass, like the strict xfail in tests/test_verification.py)
 KNOWN_FAILURES = {
-    PLATEAU_MEAN: "the free-slip walls of this 2D model: the SPH plateau lies above the repetitions' band "
-    "(+0.21 / +0.24 / +0.28 at H/20 / H/40 / H/80), as 2D interFoam with the same free-slip walls does "
-    "(+0.31 at H/20 and H/40); with no-slip walls interFoam lies inside the band "
-    "(reference_cases/openfoam_lobovsky_impact/README.md). No-slip SPH walls do not move it (0.766 / 0.850 "
-    "at H/20 / H/40): the physical wall shear is negligible at these particle sizes "
-    "(verification/results/impact_pressure/README.md, no-slip section)",
+    PLATEAU_MEAN: "no corner separation: the experiment's flat plateau is that of a separated eddy at "
+    "the foot of the far wall; the SPH keeps the unseparated stagnation corner and lies above the "
+    "repetitions' band (+0.21 / +0.24 / +0.28 at H/20 / H/40 / H/80), as 2D interFoam does with slip walls "
+    "(+0.31) or with no-slip walls and upwind convection (+0.32); interFoam's no-slip runs separate and lie "
+    "in the band through linearUpwind's wall-value gradient, not viscosity "
+    "(reference_cases/openfoam_lobovsky_impact/README.md). No-slip SPH walls (0.766 / 0.850) and the log-law "
+    "wall function (walls='wall_function') do not separate it at these particle sizes "
+    "(verification/results/impact_pressure/README.md)",
     PLATEAU_MEAN_2D: "SPH converges toward 2D interFoam with the same free-slip walls (0.925) from below: "
     "-0.11 / -0.07 / -0.03 at H/20 / H/40 / H/80, more than the first-order allowance from H/20-H/40 "
     "at H/20 (reference_cases/openfoam_lobovsky_impact/README.md)",
@@ -137,7 +143,8 @@ KNOWN_FAILURES = {
 
 def scene(resolution, end_star=T_END, walls="free_slip", **numerics):
     """The tank at H/resolution; walls: the kind of all four ("free_slip": this case's model; "no_slip":
-    the physical tank, a variant studied in verification/results/impact_pressure/README.md)."""
+    the physical tank, and "wall_function", free slip with the log-law wall shear: variants studied in
+    verification/results/impact_pressure/README.md)."""
     dx = H / resolution
     raw = {
         "scene": {

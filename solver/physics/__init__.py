@@ -23,6 +23,7 @@ from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .tait_eos import TaitEquationOfState
 from .viscous_stress import ViscousStress
+from .wall_function import WallFunctionShear
 from .wall_images import WallImages
 from .wall_repulsion import WallRepulsion
 
@@ -41,6 +42,7 @@ TERMS = (
     FrictionalWalls,
     ViscousStress,
     FluidRates,
+    WallFunctionShear,
     DensityDiffusionRate,
     SoilRates,
     ArtificialStressForce,

@@ -1,0 +1,114 @@
+"""Numerical variants of the interFoam Lobovsky tank: what makes the no-slip run's corner eddy (corner.py)?
+
+    python -m reference_cases.openfoam_lobovsky_impact.variants --cells-per-H N --walls noSlip|slip
+        [--nu-water NU] [--div-U SCHEME] [--nice 10]
+
+Each variant is the reference case (run.py, open top) with one change: the water's kinematic viscosity
+(default 1e-6 m^2/s) or the convection scheme of the momentum equation (default "Gauss linearUpwind
+grad(U)", the reference's; "Gauss upwind" uses no reconstruction gradient, so the wall's velocity
+enters the momentum equation only through the viscous term). Its fields go to work/<label> (not in
+git), its sensor metrics (the impact case's functions, as run.py) and corner numbers (corner.py) to
+one row of data/variants.csv, with the command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import re
+import shlex
+import sys
+import time
+from pathlib import Path
+
+from reference_cases import _common as C
+
+from . import corner
+from . import run as R
+
+OUT = R.DATA_DIR / "variants.csv"
+DEFAULT_DIV_U = "Gauss linearUpwind grad(U)"
+FIELDS = ("label", "cells_per_H", "walls", "nu_water", "div_U", "impact_s2", "plateau_mean_s1",
+          "plateau_mean_s2", "plateau_mean_s3", "plateau_mean_s4", "backflow_u", "reversed_fraction",
+          "downflow_v", "wall_shear_Pa", "cpu_s", "load", "command")  # fmt: skip
+
+
+def label_of(n: int, walls: str, nu: float, div_u: str) -> str:
+    tag = f"h{n}_var_{walls}_nu{nu:.0e}"
+    return tag + ("" if div_u == DEFAULT_DIV_U else "_" + re.sub(r"[^A-Za-z0-9]+", "", div_u.split()[1]))
+
+
+def write_variant(work: Path, n: int, walls: str, nu: float, div_u: str) -> None:
+    R.write_case(work, R.case_values(n, R.T_END_STAR * R.TIME_SCALE, walls=walls))
+    tp = work / "constant" / "transportProperties"
+    text = tp.read_text()
+    water = text.index("water")
+    text = text[:water] + re.sub(r"nu\s+[0-9.eE+-]+;", f"nu              {nu:g};", text[water:], count=1)
+    tp.write_text(text)
+    fs = work / "system" / "fvSchemes"
+    fs.write_text(fs.read_text().replace(f"div(rhoPhi,U)   {DEFAULT_DIV_U};", f"div(rhoPhi,U)   {div_u};"))
+    if div_u not in fs.read_text():
+        raise RuntimeError(f"{fs}: could not set div(rhoPhi,U) to {div_u}")
+
+
+def run_variant(n: int, walls: str, nu: float, div_u: str) -> dict:
+    C.require("blockMesh", "setFields", "interFoam", "postProcess")
+    label = label_of(n, walls, nu, div_u)
+    work = R.WORK_DIR / label
+    write_variant(work, n, walls, nu, div_u)
+    logs = work / "logs"
+    logs.mkdir()
+    cpu0 = os.times()
+    for cmd in (["blockMesh"], ["setFields"], ["interFoam"]):
+        C.run(cmd, work, logs / f"{cmd[0]}.log", R.FOAM_ENV)
+    cpu1 = os.times()
+    C.run(["postProcess", "-func", "writeCellCentres", "-time", "0"], work, logs / "cc.log", R.FOAM_ENV)
+    red = R.reduce_probes(work, n)
+    m = R.impact_metrics(red["t"] / R.TIME_SCALE, red["p_star"])
+    cm = corner.corner_metrics(corner.grid_fields(label, work, n), mu=nu * R.RHO_W)
+    row = {
+        "label": label,
+        "cells_per_H": n,
+        "walls": walls,
+        "nu_water": nu,
+        "div_U": div_u,
+        **{k: round(m.get(k, float("nan")), 4) for k in FIELDS[5:10]},
+        **{k: round(cm[k], 3) for k in ("backflow_u", "reversed_fraction", "downflow_v", "wall_shear_Pa")},
+        "cpu_s": round(
+            cpu1.children_user - cpu0.children_user + cpu1.children_system - cpu0.children_system, 1
+        ),  # fmt: skip
+        "load": round(os.getloadavg()[0], 2),
+        "command": "python -m reference_cases.openfoam_lobovsky_impact.variants "
+        + shlex.join(["--cells-per-H", str(n), "--walls", walls, "--nu-water", f"{nu:g}", "--div-U", div_u]),
+    }
+    new = not OUT.is_file()
+    with open(OUT, "a", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        if new:
+            w.writeheader()
+        w.writerow(row)
+    return row
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--cells-per-H", type=int, default=20)
+    p.add_argument("--walls", choices=R.WALLS, default="noSlip")
+    p.add_argument("--nu-water", type=float, default=1e-6)
+    p.add_argument("--div-U", default=DEFAULT_DIV_U)
+    p.add_argument("--nice", type=int, default=0)
+    a = p.parse_args(argv)
+    if a.nu_water < 0:
+        print("--nu-water: must be >= 0", file=sys.stderr)
+        return 2
+    if a.nice:
+        os.nice(a.nice)
+    t0 = time.perf_counter()
+    row = run_variant(a.cells_per_H, a.walls, a.nu_water, a.div_U)
+    print({k: v for k, v in row.items() if k != "command"}, f"wall {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
