@@ -4,11 +4,11 @@
 
 Every term's run, every ghost/image refresh, the predictor, kick, drift, state checks and the
 neighbour rebuild are timed on their own (wall and CPU time; the fastest of --blocks blocks of
---steps steps per phase), first at one thread, then at two in the same process. The two-thread
-ceiling printed is Amdahl's: the one-thread time of each phase divided by that phase's own
-measured speed-up, summed. On a loaded host the two-thread wall figures are unreliable (print the
-load beside them); the one-thread CPU shares are what says which phase a speed-up must come from.
-The rebuild is timed by calling it directly (--rebuilds times) and scaled by its measured frequency.
+--steps steps per phase), first at one thread, then at two in the same process. The "x" column
+is each phase's own two-thread speed-up (wall time). On a loaded host the two-thread figures are
+unreliable (the load is printed); the one-thread CPU shares say which phase a speed-up must come
+from, and the serial phases' share gives Amdahl's two-thread ceiling. The rebuild is timed by
+calling it directly (--rebuilds times); its measured frequency in the timed steps is printed.
 """
 
 from __future__ import annotations
@@ -110,23 +110,24 @@ def main(argv=None):
     if 2 in res:
         head += f" {'wall 2t':>8s} {'x':>5s}"
     print(head)
-    ceiling = 0.0
     for k in names:
-        line = f"{k:44s} {cpu1[k] * 1e3:8.3f} {cpu1[k] / cpu1['step (total)'] * 100:5.1f}% {wall1[k] * 1e3:8.3f}"
+        share = cpu1[k] / cpu1["step (total)"] * 100
+        line = f"{k:44s} {cpu1[k] * 1e3:8.3f} {share:5.1f}% {wall1[k] * 1e3:8.3f}"
         if 2 in res:
             w2 = res[2][0].get(k, float("nan"))
             line += f" {w2 * 1e3:8.3f} {wall1[k] / w2:5.2f}"
-            if k != "step (total)":
-                ceiling += w2
         print(line)
     inner = sum(v for k, v in wall1.items() if k not in ("step (total)", "rebuild (in steps)"))
     print(f"{'(untimed: Python, zeroing, dt)':44s} {'':8s} {'':6s} {(total1 - inner) * 1e3:8.3f}")
-    print(f"rebuild: {freq:.3f} per step; one rebuild cpu {rbc1 * 1e3:.2f} ms, wall 1t {rbw1 * 1e3:.2f} ms", end="")
+    one = f"one rebuild cpu {rbc1 * 1e3:.2f} ms, wall 1t {rbw1 * 1e3:.2f} ms"
+    print(f"rebuild: {freq:.3f} per step; {one}", end="")
     if 2 in res:
         print(f", wall 2t {res[2][3] * 1e3:.2f} ms")
         w2 = res[2][0]["step (total)"]
-        print(f"step at 2 threads: {w2 * 1e3:.3f} ms, {total1 / w2:.2f}x; {n / total1 / 1e6:.2f} M (1t) "
-              f"{n / w2 / 1e6:.2f} M (2t) particle-steps/s wall")
+        print(
+            f"step at 2 threads: {w2 * 1e3:.3f} ms, {total1 / w2:.2f}x; {n / total1 / 1e6:.2f} M (1t) "
+            f"{n / w2 / 1e6:.2f} M (2t) particle-steps/s wall"
+        )
     else:
         print()
 
