@@ -179,9 +179,18 @@ def _lists(x, h):
 
 
 @pytest.mark.parametrize(
-    "with_av,with_art,dim", [(False, False, 2), (True, False, 2), (True, True, 2), (True, True, 3)]
+    "with_av,with_art,dim,mixed",
+    [
+        (False, False, 2, True),
+        (True, False, 2, True),
+        (True, True, 2, True),
+        (True, True, 2, False),
+        (True, True, 3, True),
+        (True, True, 3, False),
+    ],
 )
-def test_soil_rates_match_twin(rng, with_av, with_art, dim):
+def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
+    """mixed=False: the one-soil-material path (AV constants of the target for every pair)."""
     dx, h = 0.01, 0.013
     x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
     n = len(x)
@@ -225,6 +234,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
         av,
         av,
         True if dim == 3 else None,
+        mixed,
     )
     if with_art:  # the artificial stress force is a pass (term) of its own
         flags = np.zeros(n, np.uint8)
