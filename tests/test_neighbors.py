@@ -69,3 +69,31 @@ def test_cost_is_linear_in_particle_count(rng, monkeypatch):
     # bounded by the 9-cell stencil (edge particles see fewer cells, so it rises towards the bound)
     assert max(per_particle) < 9 * 2.6**2 * 1.2, per_particle
     assert per_particle[2] < 1.2 * per_particle[1], per_particle
+
+
+@pytest.mark.parametrize("dim,n_side", [(1, 60), (2, 20), (3, 7)])
+def test_list_order_is_that_of_the_cell_offsets(dim, n_side, rng):
+    """The scan visits the neighbour cells in the order of CellGrid.offsets and each cell's rows
+    in binned order: a NumPy twin that takes every neighbour cell's coordinates apart gives the
+    same lists element for element (the order fixes every pair sum's round-off)."""
+    dx = 0.01
+    x = disordered_lattice(n_side, dim, dx, rng, jitter=0.45)
+    radius = 2.6 * dx
+    grid = CellGrid.covering(np.zeros(dim), np.full(dim, n_side * dx), radius, pad=radius)
+    cells = CellList(grid)
+    cells.bin(x, len(x))
+    targets = rng.permutation(len(x)).astype(np.int64)
+    nl = cells.neighbour_list(x, targets, radius)
+    strides = np.cumprod(np.concatenate([[1], grid.shape[:-1]]))
+    for t, i in enumerate(targets):
+        k = (cells.cells[i] // strides) % grid.shape
+        expected = []
+        for off in grid.offsets:
+            a = k + off
+            if np.any(a < 0) or np.any(a >= grid.shape):
+                continue
+            c = int(a @ strides)
+            for j in cells.order[cells.cell_start[c] : cells.cell_start[c + 1]]:
+                if j != i and np.sum((x[i] - x[j]) ** 2) < radius**2:
+                    expected.append(j)
+        assert nl.index[nl.start[t] : nl.start[t + 1]].tolist() == expected

@@ -10,7 +10,7 @@ from solver.kernels import cubic_spline_normalisation, cubic_spline_w
 from solver.materials import YieldModel
 from solver.neighbors import CellGrid, CellList
 from solver.physics.artificial_stress import artificial_stress, artificial_stress_force, tension_flags
-from solver.physics.soil_rates import jaumann, soil_rates
+from solver.physics.soil_rates import PAIR_COLUMNS, jaumann, soil_pair_terms, soil_rates
 from solver.physics.soil_stress import return_map, soil_stress_state
 
 K, G = 7.0e5, 3.2e5
@@ -147,6 +147,29 @@ def test_jaumann_update_is_objective_under_rigid_rotation():
     assert j2root(s) == pytest.approx(j2root(s0), rel=1e-9)
 
 
+def run_soil_rates(targets, start, index, x, v, rho, p, s, mass, *rest):
+    """The two kernels of the SoilRates term: the per-row table, then the pair pass."""
+    pair = np.empty((len(x), PAIR_COLUMNS))
+    soil_pair_terms(len(x), rho, p, s, mass, pair)
+    soil_rates(targets, start, index, x, v, rho, s, pair, *rest)
+
+
+def test_soil_pair_terms_match_twin(rng):
+    """The per-row table: sigma / rho^2 (eq. 12) in the Voigt order of its columns, m / rho, m."""
+    n = 40
+    rho = 2000 * (1 + rng.uniform(-0.05, 0.05, n))
+    p = rng.uniform(-500, 3000, n)
+    s = rng.normal(0, 500, (n, 6))
+    mass = rng.uniform(0.1, 0.3, n)
+    pair = np.full((n + 3, PAIR_COLUMNS), np.nan)
+    soil_pair_terms(n, rho, p, s, mass, pair)
+    sig = s - p[:, None] * np.array([1, 1, 1, 0, 0, 0])
+    q = sig / rho[:, None] ** 2  # (xx, yy, zz, xy, yz, xz)
+    expected = np.column_stack([q[:, 0], q[:, 1], q[:, 3], mass / rho, mass, q[:, 2], q[:, 4], q[:, 5]])
+    np.testing.assert_allclose(pair[:n], expected, rtol=1e-14)
+    assert np.isnan(pair[n:]).all()  # rows beyond n untouched
+
+
 def _lists(x, h):
     radius = 2 * h
     lo, hi = x.min(axis=0) - h, x.max(axis=0) + h
@@ -156,9 +179,18 @@ def _lists(x, h):
 
 
 @pytest.mark.parametrize(
-    "with_av,with_art,dim", [(False, False, 2), (True, False, 2), (True, True, 2), (True, True, 3)]
+    "with_av,with_art,dim,mixed",
+    [
+        (False, False, 2, True),
+        (True, False, 2, True),
+        (True, True, 2, True),
+        (True, True, 2, False),
+        (True, True, 3, True),
+        (True, True, 3, False),
+    ],
 )
-def test_soil_rates_match_twin(rng, with_av, with_art, dim):
+def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
+    """mixed=False: the one-soil-material path (AV constants of the target for every pair)."""
     dx, h = 0.01, 0.013
     x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
     n = len(x)
@@ -181,7 +213,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
     norm = cubic_spline_normalisation(dim, h)
     w_dx = cubic_spline_w(dx, h, norm)
     drho, acc, ds = np.zeros(n), np.zeros((n, dim)), np.zeros((n, 6))
-    soil_rates(
+    run_soil_rates(
         nl.targets,
         nl.start,
         nl.index,
@@ -202,10 +234,13 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim):
         av,
         av,
         True if dim == 3 else None,
+        mixed,
     )
     if with_art:  # the artificial stress force is a pass (term) of its own
         flags = np.zeros(n, np.uint8)
-        tension_flags(n, art, flags)
+        tense = (art != 0.0).any(axis=1)
+        assert tension_flags(n, art, flags) == tense.sum()  # the count that lets the term skip the pass
+        np.testing.assert_array_equal(flags, tense)
         artificial_stress_force(
             nl.targets, nl.start, nl.index, x, mass, art, flags, h, norm, 2.55, 1.0 / w_dx, acc,
             True if dim == 3 else None,
@@ -314,7 +349,7 @@ def test_single_shear_elastic_then_plastic_plateau():
     history = []
     for k in range(int(3 * gamma_elastic_end / (rate * dt))):
         S = np.tile(s, (n, 1))
-        soil_rates(
+        run_soil_rates(
             nl.targets,
             nl.start,
             nl.index,

@@ -13,6 +13,7 @@ from solver.kernels import cubic_spline_normalisation
 # The kernels under test, imported in this one place (each lives in its term's module).
 from solver.physics.fluid_rates import fluid_rates
 from solver.physics.frictional_walls import frictional_images
+from solver.physics.gravity import add_gravity
 from solver.physics.hydrostatic_image_pressure import add_hydrostatic_image_pressure
 from solver.physics.midpoint_continuity import midpoint_continuity
 
@@ -133,3 +134,13 @@ def test_frictional_images_match_twin(rng, dim):
     assert slipping == want_slipping
     np.testing.assert_array_equal(got_vsign, want_vsign)
     np.testing.assert_allclose(got_s6, want_s6, rtol=1e-12, atol=1e-9)
+
+
+def test_gravity_kernel_matches_numpy(rng):
+    """add_gravity adds g to the first n rows only (the NumPy broadcast it replaced)."""
+    acc = rng.normal(0, 1, (50, 2))
+    g = np.array([0.5, -9.81])
+    expected = acc.copy()
+    expected[:40] += g
+    add_gravity(40, g, acc)
+    np.testing.assert_array_equal(acc, expected)
