@@ -22,6 +22,9 @@ of p with p~_b the pore pressure interpolated at the soil particle (Shepard) and
 interpolated back at the water particle (so no water particle feels its own pressure through a
 support cut by a wall), gives -(1 - n) grad p to the skeleton and +(1 - n) grad p to the water.
 Wall particles of fixed water blocks take no part in the pairs (they are walls, not pore water).
+numerics.pore_pressure_at_water = "linear" (opt-in) takes p^_a from a weighted linear fit of p~ over
+the soil neighbours instead, exact where a bed's surface under water cuts the soil support
+(docs/seepage.md, case 4).
 In the mixture form the water's continuity also feels the pores squeezed by the skeleton (Biot's
 storage: D ln rho_w/Dt gets -(phi/n) div v_s, phi = 1 - n the solid fraction at the water
 particle), which is what drives consolidation, and pore water starts at n rho_w with that as its
