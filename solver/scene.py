@@ -315,6 +315,9 @@ class Numerics(Strict):
     density_diffusion_delta: Annotated[float, Field(gt=0.0, le=1.0)] = 0.1
     wall_repulsion: bool = True
     seepage: Choice[Seepage] = Seepage.MIXTURE
+    # mixture: p^ at water, the buoyancy pair's water side (docs/seepage.md): "linear" is exact at a
+    # bed's free surface under water, where "shepard" is off by O(h)
+    pore_pressure_at_water: Literal["shepard", "linear"] = "shepard"
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off

@@ -3,6 +3,7 @@ of docs/seepage.md: all-pairs loops over the other phase, no neighbour lists.
 
   p~_b         = sum_a V_a p_a W_ab / sum_a V_a W_ab                     (Shepard, 0 if no water)
   p^_a         = sum_b V_b p~_b W_ab / sum_b V_b W_ab                    (Shepard, p_a if no soil)
+                 or (linear) the value at x_a of the V_b W_ab-weighted linear fit of p~_b
   F_ab (on b)  = V_a V_b C W_ab (v_a - v_b) - phi V_a V_b (p^_a - p~_b) grad_b W_ab
                  (C = drag of b's material, phi = 1 - n in the mixture form, 0 in the seed's)
   soil b       acc += sum_a F_ab / m_b
@@ -29,14 +30,27 @@ def pore_pressure_at_soil(soil, water, x, rho, mass, p, h, dim, radius):
     return out
 
 
-def pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius):
-    """pore with p^_a written on the water rows (soil rows kept)."""
+def pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius, linear=False, ridge=1e-2):
+    """pore with p^_a written on the water rows (soil rows kept). linear: p^_a = alpha of the weighted
+    least-squares fit pore_b ~ alpha + beta . (x_b - x_a), weights w_b = V_b W_ab, with `ridge` times the
+    mean variance of the offsets (about their weighted mean) added to the slope's normal matrix."""
     out = pore.copy()
     for a in water:
         w = np.array([mass[b] / rho[b] * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim) for b in soil])
         inside = np.array([_within(x[a], x[b], radius) for b in soil])
         w = np.where(inside, w, 0.0)
-        out[a] = (w @ pore[soil]) / w.sum() if w.sum() > 0 else p[a]
+        if w.sum() <= 0:
+            out[a] = p[a]
+            continue
+        out[a] = (w @ pore[soil]) / w.sum()
+        if linear:
+            d = x[soil] - x[a]
+            d_mean = w @ d / w.sum()
+            p_mean = out[a]
+            cov = (w[:, None] * (d - d_mean)).T @ (d - d_mean)
+            cov += ridge * np.trace(cov) / dim * np.eye(dim)
+            beta = np.linalg.solve(cov, (w * (pore[soil] - p_mean)) @ (d - d_mean))
+            out[a] = p_mean - d_mean @ beta
     return out
 
 

@@ -60,7 +60,7 @@ def _pore(s):
     return pore
 
 
-def _rates(s, mixture=True, storage=True, wall=None, one_soil=None):
+def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None):
     """Both sides in the solver's order: p~ at the soil, the water side (which writes p^ on the
     water rows in the mixture form), then the soil side. Returns acc, drho, the two relaxation
     rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
@@ -72,7 +72,7 @@ def _rates(s, mixture=True, storage=True, wall=None, one_soil=None):
     lam_w = seepage_on_water(
         s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
         s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc,
-        drho if storage else None, s["p"] if mixture else None, pore, is3d, wall, one_soil,
+        drho if storage else None, s["p"] if mixture else None, pore, is3d, wall, one_soil, linear,
     )  # fmt: skip
     lam_s = seepage_on_soil(
         s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
@@ -109,6 +109,66 @@ def test_pore_pressure_at_water_matches_twin(rng, dim):
     pore = _rates(s)[4]
     np.testing.assert_allclose(pore, expected, rtol=1e-12)
     assert pore[0] == s["p"][0]
+
+
+@pytest.mark.parametrize("dim,one_soil", [(2, None), (2, 1), (3, None)])
+def test_linear_pore_pressure_at_water_matches_twin(rng, dim, one_soil):
+    """numerics.pore_pressure_at_water = "linear": p^ the value at x_a of the weighted linear fit of
+    the soil's p~ (the kernel's closed-form normal equations against the twin's np.linalg.solve), and
+    the forces built on it equal and opposite."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    if one_soil is not None:
+        s["material"][s["soil"]] = one_soil
+    acc, _, _, _, pore = _rates(s, storage=False, one_soil=one_soil, linear=True)
+    expected = naive_seepage.pore_pressure_at_water(
+        s["water"],
+        s["soil"],
+        s["x"],
+        s["rho"],
+        s["mass"],
+        s["p"],
+        _pore(s),
+        s["h"],
+        dim,
+        s["radius"],
+        linear=True,
+    )
+    np.testing.assert_allclose(pore, expected, rtol=1e-10)
+    shepard = _rates(s, storage=False, one_soil=one_soil)[4]
+    assert np.abs(pore - shepard)[s["water"]].max() > 1.0  # the switch does something
+    momentum_rate = (s["mass"][:, None] * acc).sum(axis=0)
+    assert np.abs(momentum_rate).max() <= 1e-14 * (s["mass"][:, None] * np.abs(acc)).sum()
+
+
+def test_linear_pore_pressure_is_exact_at_a_bed_surface():
+    """A bed's free surface under water (water rows continuing above the soil's top row), p~ linear
+    in y (still water: p = gamma_w (H - y)): the Shepard p^ of the water just above the bed reads the
+    pressure of the soil below it, about gamma_w h too high; the linear fit reads the water's own to
+    the ridge's bias (RIDGE), wherever the soil neighbours span two rows or more."""
+    from solver.physics.seepage import RIDGE
+
+    dim, dx = 2, 0.01
+    h = 1.3 * dx
+    xs = (np.stack(np.meshgrid(np.arange(10), np.arange(6), indexing="ij"), -1).reshape(-1, 2) + 0.5) * dx
+    xw = (np.stack(np.meshgrid(np.arange(10), np.arange(9), indexing="ij"), -1).reshape(-1, 2) + 0.5) * dx
+    x = np.vstack([xw, xs])
+    nw = len(xw)
+    water, soil = np.arange(nw), np.arange(nw, len(x))
+    material = np.zeros(len(x), dtype=np.int32)
+    material[soil] = 1
+    rho = np.where(material == 0, 400.0, 1600.0)
+    mass = rho * dx**dim
+    gamma = 9810.0
+    p = gamma * (0.1 - x[:, 1])
+    radius = 2 * h * 1.1
+    pore = np.where(material == 1, p, 0.0)  # p~ on the soil: exact
+    exact, shepard = (
+        naive_seepage.pore_pressure_at_water(water, soil, x, rho, mass, p, pore, h, dim, radius, linear=lin)
+        for lin in (True, False)
+    )
+    above = water[(xw[:, 1] > 0.06) & (xw[:, 1] < 0.07) & (xw[:, 0] > 2 * dx) & (xw[:, 0] < 8 * dx)]
+    assert np.abs(shepard[above] - p[above]).min() > 0.5 * gamma * dx
+    assert np.abs(exact[above] - p[above]).max() < 10 * RIDGE * gamma * dx
 
 
 def _expected(s, mixture, water=None):

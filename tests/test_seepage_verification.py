@@ -107,27 +107,29 @@ def test_critical_gradient_seed_does_not_heave_above_ic():
 
 @pytest.fixture(scope="module")
 def critical_mixture():
-    """dx = 5 mm, mixture, aimed at 0.9 and 1.3 i_c (measured 0.81 and 1.14 i_c)."""
-    return [seepage_critical_gradient.run_one(12, r, "mixture") for r in (0.9, 1.3)]
+    """dx = 5 mm, mixture (outflow pool, linear p^), aimed at 0.95 and 1.08 i_c (measured 0.953 and
+    1.069 i_c, sigma' ratios 0.156 and 0.073: docs/seepage.md, case 4)."""
+    return [seepage_critical_gradient.run_one(12, r, "mixture") for r in (0.95, 1.08)]
 
 
 @pytest.mark.slow
-def test_critical_gradient_mixture_runs_and_loses_effective_stress(critical_mixture):
-    """The former blow-up at the baffle is gone (docs/seepage.md, "Pore water along a wall"); Darcy's
-    law holds in the sample (5 %: the Darcy case's 2 % plus the sample's short fit band); the
-    effective stress falls as i grows, to the quick condition above i_c."""
+def test_critical_gradient_mixture_onset_within_ten_percent_at_5mm(critical_mixture):
+    """The case's check at 5 mm: stable at >= 0.9 i_c, quick at <= 1.1 i_c, so the onset lies within the
+    issue's 10 % of i_c (the finer bracket, [1.005, 1.050] i_c, is the default run's); Darcy's law holds
+    in the sample (5 %: the Darcy case's 2 % plus the sample's short fit band); no blow-up (the former
+    one at the baffle, docs/seepage.md, "Pore water along a wall")."""
     below, above = critical_mixture
     for r in critical_mixture:
         assert abs(r["q"] / (seepage_critical_gradient.K * r["i_sample"]) - 1.0) < 0.05, r["q"]
-    assert below["i"] < seepage_critical_gradient.critical_gradient() < above["i"]
-    assert above["stress_ratio"] < 0.5 * below["stress_ratio"], (below["stress_ratio"], above["stress_ratio"])
+    assert not below["heave"] and above["heave"], (below["stress_ratio"], above["stress_ratio"])
+    checks = seepage_critical_gradient.checks({"mixture": critical_mixture, "seed": []})
+    assert all(c.passed for c in checks), [c.line() for c in checks]
 
 
 @pytest.mark.nightly
 def test_critical_gradient_onset_mixture():
-    """dx = 2.5 mm (the case's default): the onset bracket of the quick condition within 10 % of
-    i_c (measured [0.914, 1.034] i_c; at 5 mm the outflow surface's stress offset puts the quick
-    condition at 1.14 i_c, docs/seepage.md, case 4)."""
+    """dx = 2.5 mm: the onset bracket of the quick condition within 10 % of i_c (docs/seepage.md, case 4;
+    the default resolution, 5 mm, is checked by the nightly case run)."""
     res = seepage_critical_gradient.run(24, ratios={"mixture": (0.95, 1.1), "seed": ()})
     assert not _failed(res), "\n".join(_failed(res))
 

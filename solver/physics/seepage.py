@@ -22,6 +22,9 @@ of p with p~_b the pore pressure interpolated at the soil particle (Shepard) and
 interpolated back at the water particle (so no water particle feels its own pressure through a
 support cut by a wall), gives -(1 - n) grad p to the skeleton and +(1 - n) grad p to the water.
 Wall particles of fixed water blocks take no part in the pairs (they are walls, not pore water).
+numerics.pore_pressure_at_water = "linear" (opt-in) takes p^_a from a weighted linear fit of p~ over
+the soil neighbours instead, exact where a bed's surface under water cuts the soil support
+(docs/seepage.md, case 4).
 In the mixture form the water's continuity also feels the pores squeezed by the skeleton (Biot's
 storage: D ln rho_w/Dt gets -(phi/n) div v_s, phi = 1 - n the solid fraction at the water
 particle), which is what drives consolidation, and pore water starts at n rho_w with that as its
@@ -71,6 +74,7 @@ class SeepageSettings:
     cfl_drag: float
     one_soil: int | None = None  # the soil material id if there is only one (a compile-time switch)
     walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
+    linear: bool = False  # p^ by a linear fit (numerics.pore_pressure_at_water = "linear")
 
     @classmethod
     def of(cls, scene, materials):
@@ -94,7 +98,8 @@ class SeepageSettings:
         walls = any(b.fixed and scene.materials[b.material].model == "water" for b in scene.blocks)
         soils = materials.ids_of_phase(Phase.SOIL)
         one = int(soils[0]) if len(soils) == 1 else None
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls)
+        linear = scene.numerics.pore_pressure_at_water == "linear"
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear)
 
     @property
     def mixture(self):
@@ -126,9 +131,59 @@ def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore,
         pore[b] = num / den if den > 0.0 else 0.0
 
 
+RIDGE = 1e-2
+"""Ridge of the linear p^ fit, times the mean variance of the neighbours' offsets: a direction in
+which the soil neighbours have (almost) no spread, e.g. water two rows above a bed that sees only its
+top row, gets no slope (Shepard's value) instead of a slope fitted to round-off."""
+
+
+@kernel
+def linear_fit_at_origin(s, sp, m0, m1, m2, c00, c01, c02, c11, c12, c22, r0, r1, r2, three):
+    """alpha of the weighted fit p - p0 ~ alpha + beta . d from the sums s = sum w, sp = sum w (p - p0),
+    m = sum w d, c = sum w d d^T, r = sum w (p - p0) d: beta from the centred normal equations
+    (c - m m^T / s + ridge) beta = r - m sp / s, alpha = (sp - m . beta) / s."""
+    a00 = c00 - m0 * m0 / s
+    a01 = c01 - m0 * m1 / s
+    a11 = c11 - m1 * m1 / s
+    y0 = r0 - m0 * sp / s
+    y1 = r1 - m1 * sp / s
+    if three:
+        a02 = c02 - m0 * m2 / s
+        a12 = c12 - m1 * m2 / s
+        a22 = c22 - m2 * m2 / s
+        y2 = r2 - m2 * sp / s
+        ridge = RIDGE * (a00 + a11 + a22) / 3.0
+        a00 += ridge
+        a11 += ridge
+        a22 += ridge
+        k00 = a11 * a22 - a12 * a12
+        k01 = a02 * a12 - a01 * a22
+        k02 = a01 * a12 - a02 * a11
+        det = a00 * k00 + a01 * k01 + a02 * k02
+        if not det > 0.0:
+            return sp / s
+        k11 = a00 * a22 - a02 * a02
+        k12 = a01 * a02 - a00 * a12
+        k22 = a00 * a11 - a01 * a01
+        beta0 = (k00 * y0 + k01 * y1 + k02 * y2) / det
+        beta1 = (k01 * y0 + k11 * y1 + k12 * y2) / det
+        beta2 = (k02 * y0 + k12 * y1 + k22 * y2) / det
+        return (sp - m0 * beta0 - m1 * beta1 - m2 * beta2) / s
+    ridge = RIDGE * (a00 + a11) / 2.0
+    a00 += ridge
+    a11 += ridge
+    det = a00 * a11 - a01 * a01
+    if not det > 0.0:
+        return sp / s
+    beta0 = (a11 * y0 - a01 * y1) / det
+    beta1 = (a00 * y1 - a01 * y0) / det
+    return (sp - m0 * beta0 - m1 * beta1) / s
+
+
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None):  # fmt: skip
+                     acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
+                     linear=None):  # fmt: skip
     """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
     F = W'(r) / r):
       * with p and pore (mixture): p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab (Shepard, the soil's
@@ -148,6 +203,11 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
         div v_s = sum_b V_b (v_b - v~) . grad_a W_ab, v~ the Shepard soil velocity, summed
         relative to v_a: div v_s = sum_b V_b F (u . d) - (S . B) / sum_b V_b W_ab,
         S = sum_b V_b W_ab u, B = sum_b V_b F d.
+    linear (numerics.pore_pressure_at_water = "linear"): p^_a is instead the value at x_a of the
+    weighted linear fit of p~ over the soil neighbours (moving least squares of order 1, weights V_b W_ab,
+    a ridge of RIDGE times the mean variance against a support with no spread in some direction):
+    exact for a linear p~ where Shepard's is off by grad p . (centroid - x_a), which at a cut soil
+    support (a bed's free surface under water) is O(h) (docs/seepage.md, case 4).
     Returns the largest lambda_a = sum_b K_ab / m_a. wall: the fixed flags (None without fixed
     blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
     and nothing else. one_soil: the material id when the scene has one soil material (then the
@@ -166,6 +226,7 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
         f0 = f1 = f2 = lam = 0.0
         den = num = q0 = q1 = q2 = g0 = g1 = g2 = 0.0
         phi = s0 = s1 = s2 = b0 = b1 = b2 = div = 0.0
+        m0 = m1 = m2 = c00 = c01 = c02 = c11 = c12 = c22 = r0 = r1 = r2 = 0.0  # linear p^ only
         for s in range(first, last):
             b = index[s]
             if one_soil is None:
@@ -204,6 +265,19 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
                     q0 += sf * d0
                     q1 += sf * d1
                     q2 += sf * d2
+                if linear is not None:
+                    m0 += vw * d0
+                    m1 += vw * d1
+                    m2 += vw * d2
+                    c00 += vw * d0 * d0
+                    c01 += vw * d0 * d1
+                    c02 += vw * d0 * d2
+                    c11 += vw * d1 * d1
+                    c12 += vw * d1 * d2
+                    c22 += vw * d2 * d2
+                    r0 += vw * (pore[b] - p0) * d0
+                    r1 += vw * (pore[b] - p0) * d1
+                    r2 += vw * (pore[b] - p0) * d2
             if drho is not None:
                 phi += mass[b] / grain_density[mb] * w
                 s0 += vw * u0
@@ -218,6 +292,12 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
             g2 *= sol
         if pore is not None:
             p_hat = num / den if den > 0.0 else p[a]
+            if linear is not None and den > 0.0:
+                sp = num - p0 * den
+                three = is3d is not None
+                p_hat = p0 + linear_fit_at_origin(
+                    den, sp, m0, m1, m2, c00, c01, c02, c11, c12, c22, r0, r1, r2, three
+                )
             pore[a] = p_hat
             excess = p_hat - p0
             f0 -= excess * q0 - g0  # buoyancy / V_a along d: -sum_b phi_b V_b (p^_a - p~_b) F d
@@ -374,6 +454,12 @@ class SeepageOnWater(_Coupling):
                 Equation(
                     "pore pressure at water p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab over soil b",
                     "Shepard interpolation",
+                )
+                if not settings.linear
+                else Equation(
+                    "pore pressure at water p^_a = alpha of the V_b W_ab-weighted fit p~_b ~ alpha + beta . "
+                    "(x_b - x_a) over soil b",
+                    "moving least squares, order 1 (docs/seepage.md, case 4)",
                 ),
             ) + self.equations
             self.equations += (
@@ -389,7 +475,7 @@ class SeepageOnWater(_Coupling):
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
-            ps["fixed"] if st.walls else None, st.one_soil,
+            ps["fixed"] if st.walls else None, st.one_soil, True if st.linear and mix else None,
         )  # fmt: skip
 
 
