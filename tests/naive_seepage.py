@@ -122,21 +122,3 @@ def corrected_accelerations(soil, water, x, v, rho, mass, material, pore, drag, 
             acc[a] -= f / mass[a]
     return acc
 
-
-def pore_water_shift(water, x, v, rho, mass, label, fixed, h, dim, radius, coeff, full=(0.85, 0.95)):
-    """Lind et al. (2012)'s Fickian shift of each pore-water row a (label < 1, not fixed), from all
-    water within reach: dr = -s coeff h |v_a| sum_b V_b grad_a W_ab, s = clip((C_a - full[0]) /
-    (full[1] - full[0]), 0, 1), C_a = sum_b V_b W_ab including a itself. Rows: water's order."""
-    out = np.zeros((len(water), dim))
-    for t, a in enumerate(water):
-        if label[a] >= 1.0 or fixed[a]:
-            continue
-        nb = [b for b in water if b != a and _within(x[a], x[b], radius)]
-        c = mass[a] / rho[a] * cubic_spline(0.0, h, dim)
-        g = np.zeros(dim)
-        for b in nb:
-            c += mass[b] / rho[b] * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim)
-            g += mass[b] / rho[b] * grad_w(x[a], x[b], h, dim)
-        s = min(max((c - full[0]) / (full[1] - full[0]), 0.0), 1.0)
-        out[t] = -s * coeff * h * np.linalg.norm(v[a]) * g
-    return out

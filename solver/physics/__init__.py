@@ -18,7 +18,6 @@ from .hydrostatic_image_pressure import HydrostaticImagePressure
 from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import Outlets
-from .pore_water_shifting import PoreWaterShifting
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
@@ -51,7 +50,6 @@ TERMS = (
     SoilReturnMapping,
     MidpointStart,
     MidpointContinuity,
-    PoreWaterShifting,  # after the drift (and the midpoint density, which reads x_n+1 unshifted)
     BodyGuard,  # after the drift: leaks counted and reflected before particles are added or removed
     Inlets,
     Outlets,
