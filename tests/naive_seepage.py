@@ -121,4 +121,3 @@ def corrected_accelerations(soil, water, x, v, rho, mass, material, pore, drag, 
             acc[b] += f / mass[b]
             acc[a] -= f / mass[a]
     return acc
-

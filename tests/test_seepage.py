@@ -371,7 +371,7 @@ def test_seepage_terms_only_with_water_and_soil():
         plan = build_plan(scene)
         assert not names & {t.name for t in plan.terms}
         assert names <= set(plan.absent)
-        assert not {"pore_pressure", "water_fraction"} & set(plan.fields)
+        assert not {"pore_pressure", "water_fraction", "pair_correction"} & set(plan.fields)
         assert "seepage drag" not in [c.name for c in plan.constraints]
         assert (Phase.WATER, Phase.SOIL) not in plan.pairs and (Phase.SOIL, Phase.WATER) not in plan.pairs
     box = lambda form: parse_scene(__import__("tomllib").loads(BOX.replace("{form}", form)), "box.toml")
@@ -383,6 +383,7 @@ def test_seepage_terms_only_with_water_and_soil():
         assert (Phase.SOIL, Phase.WATER) in plan.pairs and (Phase.WATER, Phase.SOIL) in plan.pairs
         assert "seepage drag" in [c.name for c in plan.constraints]
     assert "pore_pressure" in mix.fields and "pore_pressure" not in seed.fields
+    assert "pair_correction" in mix.fields and "pair_correction" not in seed.fields  # mixture buoyancy only
 
 
 def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():
