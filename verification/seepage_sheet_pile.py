@@ -300,6 +300,50 @@ class HeldPoreWater:
         ps["x"][self.inverse[self.ids]] = self.x0
 
 
+class HydrostaticPorePass:
+    """Diagnostic (not the solver's physics; docs/seepage.md, case 5): while active, the water's own
+    pressure pass (FluidRates) acts on the pore water (pore_label < 1, not fixed) as the symmetric form
+    of p - P_h, P_h = gamma_w (Y0 - y), plus P_h's gradient as the symmetric form reads it on a lattice
+    (kappa gamma_w / rho, upward): the hydrostatic part no longer multiplies the zeroth-order term
+    sum_b V_b grad W that the pore water's distortion makes nonzero. Not momentum-conserving (the
+    neighbours get no reaction): a test of the mechanism, not a fix. Use as a context manager around
+    run_one (it patches FluidRates.run)."""
+
+    Y0 = 0.5 * (H_UP + H_DOWN)  # the mean head: p - P_h is then at most gamma_w dH / 2 in the pores
+
+    def __enter__(self):
+        from solver.physics import fluid_rates
+        from solver.physics.seepage import lattice_gradient_normalisation
+
+        self.module, self.original = fluid_rates, fluid_rates.FluidRates.run
+        kappa, original, y0 = lattice_gradient_normalisation(2, 1.3), self.original, self.Y0
+
+        def run(term, ctx):
+            original(term, ctx)
+            ps, nl = ctx.particles, ctx.neighbours(term)
+            i = np.repeat(nl.targets, np.diff(nl.start))
+            j = nl.index
+            keep = (ps["pore_label"][i] < 1.0) & ~ps["fixed"][i]
+            i, j = i[keep], j[keep]
+            x, rho, m, acc = ps["x"], ps["rho"], ps["mass"], ps["acc"]
+            p_h = sc.GAMMA_W * (y0 - x[:, 1])
+            d = x[i] - x[j]
+            r = np.hypot(d[:, 0], d[:, 1]) + 1e-300
+            big_a, big_b = np.clip(2 - r / ctx.h, 0, None), np.clip(1 - r / ctx.h, 0, None)
+            f = ctx.norm * (-0.5 * big_a**2 + 2 * big_b**2) / ctx.h / r
+            coef = m[j] * (p_h[i] / rho[i] ** 2 + p_h[j] / rho[j] ** 2) * f
+            for axis in (0, 1):
+                acc[:, axis] += np.bincount(i, coef * d[:, axis], len(x))[: len(acc)]
+            rows = np.unique(i)
+            acc[rows, 1] += kappa * sc.GAMMA_W / rho[rows]
+
+        fluid_rates.FluidRates.run = run
+        return self
+
+    def __exit__(self, *exc):
+        self.module.FluidRates.run = self.original
+
+
 def measure(sim):
     ps = sim.particles
     dx, h_ref = sim.scene.scene.spacing, reference_head()
