@@ -97,3 +97,41 @@ def storage(water, soil, x, v, rho, mass, material, grain_density, h, dim, radiu
         div = sum(vol[k] * (v[b] - v_mean) @ grad_w(x[a], x[b], h, dim) for k, b in enumerate(nb))
         drho[a] = -rho[a] * phi / (1.0 - phi) * div
     return drho
+
+
+def pair_correction(water, soil, x, rho, mass, h, dim, radius, kappa, full=(0.98, 0.995)):
+    """L_a of the corrected mixture's buoyancy pair for every water row a (a dict of dim x dim):
+    L = (1 - s) I + s kappa M^-1, M = sum_b V_b grad_b W_ab (x) (x_a - x_b) over the soil within
+    reach (Bonet & Lok 1999), s = clip((sum_b V_b W_ab - full[0]) / (full[1] - full[0]), 0, 1), and
+    s = 0 where det M <= kappa^dim / 4."""
+    out = {}
+    for a in water:
+        m, den = np.zeros((dim, dim)), 0.0
+        for b in soil:
+            if not _within(x[a], x[b], radius):
+                continue
+            vol = mass[b] / rho[b]
+            m += vol * np.outer(grad_w(x[b], x[a], h, dim), x[a] - x[b])
+            den += vol * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim)
+        s = min(max((den - full[0]) / (full[1] - full[0]), 0.0), 1.0)
+        if not np.linalg.det(m) > 0.25 * kappa**dim:
+            s = 0.0
+        out[a] = (1.0 - s) * np.eye(dim) + (s * kappa * np.linalg.inv(m) if s > 0 else 0.0)
+    return out
+
+
+def corrected_accelerations(soil, water, x, v, rho, mass, material, pore, drag, solid, h, dim, radius, corr):
+    """seepage_accelerations with the buoyancy pair's grad_b W_ab replaced by L_a grad_b W_ab."""
+    acc = np.zeros((len(x), dim))
+    for b in soil:
+        for a in water:
+            if not _within(x[a], x[b], radius):
+                continue
+            m = material[b]
+            va, vb = mass[a] / rho[a], mass[b] / rho[b]
+            w = cubic_spline(np.linalg.norm(x[b] - x[a]), h, dim)
+            f = va * vb * drag[m] * w * (v[a] - v[b])
+            f -= solid[m] * va * vb * (pore[a] - pore[b]) * corr[a] @ grad_w(x[b], x[a], h, dim)
+            acc[b] += f / mass[b]
+            acc[a] -= f / mass[a]
+    return acc

@@ -11,7 +11,12 @@ from conftest import ENV, SCOURSPH, disordered_lattice, write_scene
 from solver.kernels import cubic_spline_normalisation
 from solver.materials import Phase
 from solver.neighbors import CellGrid, CellList
-from solver.physics.seepage import pore_pressure_at_soil, seepage_on_soil, seepage_on_water
+from solver.physics.seepage import (
+    lattice_gradient_normalisation,
+    pore_pressure_at_soil,
+    seepage_on_soil,
+    seepage_on_water,
+)
 from solver.plan import build_plan, explain
 from solver.scene import parse_scene
 from solver.simulation import Simulation
@@ -60,7 +65,7 @@ def _pore(s):
     return pore
 
 
-def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None):
+def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None, kappa=0.0):
     """Both sides in the solver's order: p~ at the soil, the water side (which writes p^ on the
     water rows in the mixture form), then the soil side. Returns acc, drho, the two relaxation
     rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
@@ -69,15 +74,18 @@ def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None)
     pore = _pore(s) if mixture else None
     is3d = True if dim == 3 else None
     solid = s["solid"] if mixture else np.zeros(3)
+    corr = np.zeros((n, 6)) if kappa > 0 else None
     lam_w = seepage_on_water(
         s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
-        s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc,
-        drho if storage else None, s["p"] if mixture else None, pore, is3d, wall, one_soil, linear,
+        s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc, drho if storage else None,
+        s["p"] if mixture else None, pore, is3d, wall, one_soil, linear, corr, kappa,
     )  # fmt: skip
     lam_s = seepage_on_soil(
         s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
-        s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall,
+        s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall, corr,
     )  # fmt: skip
+    if kappa > 0:
+        s["corr"] = corr
     return acc, drho, lam_s, lam_w, pore
 
 
@@ -257,6 +265,88 @@ def test_pair_forces_are_equal_and_opposite(rng, mixture):
     assert np.abs(momentum_rate).max() <= 1e-14 * scale
 
 
+KAPPA = {2: lattice_gradient_normalisation(2, 1.3), 3: lattice_gradient_normalisation(3, 1.3)}
+
+
+@pytest.mark.parametrize("dim,one_soil", [(2, None), (2, 1), (3, None)])
+def test_corrected_buoyancy_matches_twin(rng, dim, one_soil):
+    """The corrected mixture (buoyancy pair with L_a = kappa M_a^-1, Bonet & Lok 1999, blended to I
+    where the soil support is cut) against the twin: L_a on every water row, both sides' forces;
+    the drag, the relaxation rates, p^ and the storage are those of the uncorrected coupling."""
+    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
+    if one_soil is not None:
+        s["material"][s["soil"]] = one_soil
+    acc, drho, lam_s, lam_w, pore = _rates(s, kappa=KAPPA[dim], one_soil=one_soil)
+    plain = _rates(s, one_soil=one_soil)
+    corr = naive_seepage.pair_correction(
+        s["water"], s["soil"], s["x"], s["rho"], s["mass"], s["h"], dim, s["radius"], KAPPA[dim]
+    )
+    sym = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]
+    for a in s["water"]:
+        got = np.eye(3)
+        for k, (i, j) in enumerate(sym):
+            got[i, j] = got[j, i] = s["corr"][a, k]
+        np.testing.assert_allclose(got[:dim, :dim], corr[a], rtol=1e-10, atol=1e-12)
+    blended = [a for a in s["water"] if not np.allclose(corr[a], np.eye(dim))]
+    assert len(blended) >= 10  # the correction is reached, not only the identity (a 5^3 cube is mostly edge)
+    expected = naive_seepage.corrected_accelerations(
+        s["soil"], s["water"], s["x"], s["v"], s["rho"], s["mass"], s["material"], pore, s["drag"],
+        s["solid"], s["h"], dim, s["radius"], corr,
+    )  # fmt: skip
+    np.testing.assert_allclose(acc, expected, rtol=1e-10, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(pore, plain[4], rtol=1e-13)  # fastmath may reorder the extra sums
+    np.testing.assert_allclose(drho, plain[1], rtol=1e-12, atol=1e-13 * np.abs(plain[1]).max())
+    assert lam_s == pytest.approx(plain[2], rel=1e-13) and lam_w == pytest.approx(plain[3], rel=1e-13)
+
+
+def test_corrected_pair_forces_are_equal_and_opposite(rng):
+    """L_a multiplies each pair's vector on both sides (the soil side reads it from the water row):
+    sum_i m_i a_i = 0 to round-off, as without the correction."""
+    s = two_phase(rng)
+    acc = _rates(s, storage=False, kappa=KAPPA[2])[0]
+    momentum_rate = (s["mass"][:, None] * acc).sum(axis=0)
+    assert np.abs(momentum_rate).max() <= 1e-14 * (s["mass"][:, None] * np.abs(acc)).sum()
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (0.0, 0.25), (0.0, 0.5), (0.3, 0.45)])
+def test_corrected_pair_reads_the_lattice_normalisation_at_any_offset(offset):
+    """docs/seepage.md, case 2: pore water on a lattice offset from the skeleton's, a linear p,
+    at rest. Uncorrected, the pair's force on the water reads (1 - n) M grad p, M from 1.0105 I
+    (coincident) to diag(1.020, 0.985) (half a dx off); corrected it reads (1 - n) kappa grad p,
+    kappa = 1.0105, what the water's own pass reads on its lattice, so their difference is kappa n
+    grad p at every offset."""
+    dx, n_side, dim = 0.01, 14, 2
+    i, j = np.meshgrid(np.arange(n_side), np.arange(n_side), indexing="ij")
+    xs = (np.stack([i.ravel(), j.ravel()], axis=1) + 0.5) * dx
+    xw = xs + np.array(offset) * dx
+    x = np.vstack([xw, xs])
+    nw = len(xw)
+    material = np.r_[np.zeros(nw, np.int32), np.ones(nw, np.int32)]
+    rho = np.where(material == 0, 400.0, 1600.0)
+    grad = np.array([300.0, -1000.0])
+    h = 1.3 * dx
+    s = dict(
+        x=x, v=np.zeros_like(x), rho=rho, mass=rho * dx**dim, p=x @ grad, material=material,
+        water=np.arange(nw), soil=np.arange(nw, 2 * nw), h=h, dim=dim,
+        norm=cubic_spline_normalisation(dim, h), drag=np.array([0.0, 1e6, 1e6]),
+        solid=np.array([0.0, 0.6, 0.6]), grain=np.array([0.0, 2650.0, 2650.0]),
+    )  # fmt: skip
+    radius = 2 * h * 1.01
+    cells = CellList(CellGrid.covering(np.zeros(dim), np.full(dim, n_side * dx), radius, pad=radius))
+    cells.bin(x, len(x))
+    s["on_soil"] = cells.neighbour_list(x, s["soil"].astype(np.int64), radius, material, 0)
+    s["on_water"] = cells.neighbour_list(x, s["water"].astype(np.int64), radius, material, 1)
+    centre = int(np.argmin(np.linalg.norm(xw - 0.5 * n_side * dx, axis=1)))
+    read = {}
+    for kappa in (0.0, KAPPA[2]):
+        acc = _rates(s, storage=False, kappa=kappa)[0]
+        read[kappa] = acc[centre] * rho[centre] / 0.6  # the pair's force per unit volume / (1 - n)
+    # to 1e-5: the Shepard p~ and p^ of a linear p are exact only to ~1e-6 off the lattice points
+    np.testing.assert_allclose(read[KAPPA[2]], KAPPA[2] * grad, rtol=1e-5)
+    if offset[1] == 0.5:
+        assert read[0.0][1] == pytest.approx(0.985 * grad[1], rel=1e-3)
+
+
 BOX = """
 [scene]
 name = "two_phase_box"
@@ -341,7 +431,7 @@ def test_seepage_terms_only_with_water_and_soil():
         plan = build_plan(scene)
         assert not names & {t.name for t in plan.terms}
         assert names <= set(plan.absent)
-        assert not {"pore_pressure", "water_fraction"} & set(plan.fields)
+        assert not {"pore_pressure", "water_fraction", "pair_correction"} & set(plan.fields)
         assert "seepage drag" not in [c.name for c in plan.constraints]
         assert (Phase.WATER, Phase.SOIL) not in plan.pairs and (Phase.SOIL, Phase.WATER) not in plan.pairs
     box = lambda form: parse_scene(__import__("tomllib").loads(BOX.replace("{form}", form)), "box.toml")
@@ -353,6 +443,7 @@ def test_seepage_terms_only_with_water_and_soil():
         assert (Phase.SOIL, Phase.WATER) in plan.pairs and (Phase.WATER, Phase.SOIL) in plan.pairs
         assert "seepage drag" in [c.name for c in plan.constraints]
     assert "pore_pressure" in mix.fields and "pore_pressure" not in seed.fields
+    assert "pair_correction" in mix.fields and "pair_correction" not in seed.fields  # mixture buoyancy only
 
 
 def test_explain_shows_the_seepage_terms_their_equations_and_exchanged_fields():

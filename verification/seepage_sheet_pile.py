@@ -300,6 +300,50 @@ class HeldPoreWater:
         ps["x"][self.inverse[self.ids]] = self.x0
 
 
+class HydrostaticPorePass:
+    """Diagnostic (not the solver's physics; docs/seepage.md, case 5): while active, the water's own
+    pressure pass (FluidRates) acts on the pore water (pore_label < 1, not fixed) as the symmetric form
+    of p - P_h, P_h = gamma_w (Y0 - y), plus P_h's gradient as the symmetric form reads it on a lattice
+    (kappa gamma_w / rho, upward): the hydrostatic part no longer multiplies the zeroth-order term
+    sum_b V_b grad W that the pore water's distortion makes nonzero. Not momentum-conserving (the
+    neighbours get no reaction): a test of the mechanism, not a fix. Use as a context manager around
+    run_one (it patches FluidRates.run)."""
+
+    Y0 = 0.5 * (H_UP + H_DOWN)  # the mean head: p - P_h is then at most gamma_w dH / 2 in the pores
+
+    def __enter__(self):
+        from solver.physics import fluid_rates
+        from solver.physics.seepage import lattice_gradient_normalisation
+
+        self.module, self.original = fluid_rates, fluid_rates.FluidRates.run
+        kappa, original, y0 = lattice_gradient_normalisation(2, 1.3), self.original, self.Y0
+
+        def run(term, ctx):
+            original(term, ctx)
+            ps, nl = ctx.particles, ctx.neighbours(term)
+            i = np.repeat(nl.targets, np.diff(nl.start))
+            j = nl.index
+            keep = (ps["pore_label"][i] < 1.0) & ~ps["fixed"][i]
+            i, j = i[keep], j[keep]
+            x, rho, m, acc = ps["x"], ps["rho"], ps["mass"], ps["acc"]
+            p_h = sc.GAMMA_W * (y0 - x[:, 1])
+            d = x[i] - x[j]
+            r = np.hypot(d[:, 0], d[:, 1]) + 1e-300
+            big_a, big_b = np.clip(2 - r / ctx.h, 0, None), np.clip(1 - r / ctx.h, 0, None)
+            f = ctx.norm * (-0.5 * big_a**2 + 2 * big_b**2) / ctx.h / r
+            coef = m[j] * (p_h[i] / rho[i] ** 2 + p_h[j] / rho[j] ** 2) * f
+            for axis in (0, 1):
+                acc[:, axis] += np.bincount(i, coef * d[:, axis], len(x))[: len(acc)]
+            rows = np.unique(i)
+            acc[rows, 1] += kappa * sc.GAMMA_W / rho[rows]
+
+        fluid_rates.FluidRates.run = run
+        return self
+
+    def __exit__(self, *exc):
+        self.module.FluidRates.run = self.original
+
+
 def measure(sim):
     ps = sim.particles
     dx, h_ref = sim.scene.scene.spacing, reference_head()
@@ -474,9 +518,61 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT, formulations=("seed",)):
     return rows
 
 
+def zeroth_order_diagnostic(resolution=DEFAULT_RESOLUTION, times=(0.25, 0.5, 1.0)):
+    """Why Q drifts (docs/seepage.md, case 5, "Still drifting after seep5"): over the pore water within
+    0.08 m of the pile and 0.04-0.16 m above the floor, the symmetric pressure pass's zeroth-order term
+    |2 p_a sum_b V_b grad_a W_ab| (over all water neighbours; zero on a lattice) against the drag
+    n gamma_w |v| / k, at t = 0 and `times`. Returns [(t, median, p90, drag median, drag p90)]."""
+    from solver.kernels import cubic_spline_normalisation
+    from solver.neighbors import CellGrid, CellList
+    from solver.simulation import Simulation
+
+    sim = Simulation(scene(resolution, max(times)))
+    start_at_reference(sim, "seed")
+    hook = PileWallPressure(sim)
+    h = sim.h
+    norm = cubic_spline_normalisation(2, h)
+    drag_c = POROSITY * sc.GAMMA_W / K
+
+    def observe():
+        ps = sim.particles
+        wa = sc.water_rows(sim)
+        x, vol, p, v = ps["x"][wa], ps["mass"][wa] / ps["rho"][wa], ps["p"][wa], ps["v"][wa]
+        near = ~ps["fixed"][wa] & (np.abs(x[:, 0] - HALF) < 0.08) & (x[:, 1] > 0.04) & (x[:, 1] < 0.16)
+        cells = CellList(CellGrid.covering(x.min(0) - 0.1, x.max(0) + 0.1, 2 * h, pad=2 * h))
+        cells.bin(x, len(x))
+        targets = np.flatnonzero(near).astype(np.int64)
+        nl = cells.neighbour_list(x, targets, 2 * h)
+        term = []
+        for t, a in enumerate(targets):
+            nb = nl.index[nl.start[t] : nl.start[t + 1]]
+            d = x[a] - x[nb]
+            r = np.linalg.norm(d, axis=1)
+            big_a, big_b = np.clip(2 - r / h, 0, None), np.clip(1 - r / h, 0, None)
+            f = norm * (-0.5 * big_a**2 + 2 * big_b**2) / h / r
+            term.append(2 * p[a] * np.linalg.norm((vol[nb, None] * f[:, None] * d).sum(axis=0)))
+        drag = drag_c * np.linalg.norm(v[targets], axis=1)
+        return (sim.t, float(np.median(term)), float(np.percentile(term, 90)), float(np.median(drag)),
+                float(np.percentile(drag, 90)))  # fmt: skip
+
+    rows = [observe()]
+    for t_next in times:
+        while sim.t < t_next:
+            sim.step()
+            hook(sim)
+        rows.append(observe())
+    return rows
+
+
 if __name__ == "__main__":
     import sys
 
     from .common import case_main
+
+    if "--zeroth-order" in sys.argv:
+        for row in zeroth_order_diagnostic():
+            print("t = {:.2f} s: zeroth-order term median {:.0f}, 90 % {:.0f} N/m3; drag median {:.0f}, "
+                  "90 % {:.0f} N/m3".format(*row))  # fmt: skip
+        raise SystemExit(0)
 
     raise SystemExit(case_main(sys.modules[__name__]))

@@ -54,12 +54,22 @@ from ..kernels import cubic_spline_dwdr, cubic_spline_w
 from ..materials import Phase
 from ..particles import FieldSpec, Mirror
 from ..scene import Seepage, Soil
+from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
 from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
     0, np.float64, "pore pressure interpolated: p~ at soil, p^ at water (mixture buoyancy)", Mirror.SCALAR
+)
+
+# A geometric tensor: across a no-slip wall the image's tensor signs are +1 (kept for the stress), so
+# its shear component would keep its sign there; only free-slip walls mirror it exactly.
+PAIR_CORRECTION = FieldSpec(
+    N_SYM,
+    np.float64,
+    "buoyancy pair's gradient correction L = kappa M^-1 at water (Bonet & Lok 1999)",
+    Mirror.TENSOR,
 )
 
 
@@ -75,6 +85,7 @@ class SeepageSettings:
     one_soil: int | None = None  # the soil material id if there is only one (a compile-time switch)
     walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
     linear: bool = False  # p^ by a linear fit (numerics.pore_pressure_at_water = "linear")
+    kappa: float = 0.0  # the SPH gradient's normalisation on a lattice (mixture: the buoyancy pair's target)
 
     @classmethod
     def of(cls, scene, materials):
@@ -99,11 +110,47 @@ class SeepageSettings:
         soils = materials.ids_of_phase(Phase.SOIL)
         one = int(soils[0]) if len(soils) == 1 else None
         linear = scene.numerics.pore_pressure_at_water == "linear"
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear)
+        kappa = 0.0
+        if form == Seepage.MIXTURE and GRADIENT_CORRECTION:
+            kappa = lattice_gradient_normalisation(scene.dim, scene.numerics.h_over_dx)
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear, kappa)
+
+    @property
+    def corrected(self):
+        """The buoyancy pair carries the kernel-gradient correction (mixture form)."""
+        return self.kappa > 0.0
 
     @property
     def mixture(self):
         return self.formulation == Seepage.MIXTURE
+
+
+GRADIENT_CORRECTION = True
+"""The mixture's buoyancy pair renormalised to the water's own pressure pass (docs/seepage.md, "One
+normalisation for the pore water's two pressure operators"); False only for before/after diagnostics."""
+
+# Where the pair's soil support counts as full (the Shepard sum sum_b V_b W_ab): the correction is
+# blended in between these (a lattice with one row cut at 2 dx gives 0.969-0.990, full ones 0.9996-1.0002).
+FULL_SUPPORT = (0.98, 0.995)
+
+
+def lattice_gradient_normalisation(dim, h_over_dx):
+    """kappa = -sum_b V_b (dW/dr / r) d_x^2 over a square (cubic) lattice of spacing dx around a
+    lattice point, V_b = dx^dim: the factor by which the SPH gradient of a linear field reads on a
+    lattice (1.0105 for the cubic spline at h = 1.3 dx), what the pore water's own pressure pass (the
+    symmetric form over its own lattice) reads."""
+    from ..kernels import cubic_spline_normalisation
+
+    h = float(h_over_dx)
+    reach = int(np.ceil(2.0 * h)) + 1
+    axes = np.meshgrid(*([np.arange(-reach, reach + 1, dtype=float)] * dim), indexing="ij")
+    d = np.stack([a.ravel() for a in axes], axis=1)
+    r = np.linalg.norm(d, axis=1)
+    big_r = r / h
+    a, b = np.clip(2.0 - big_r, 0.0, None), np.clip(1.0 - big_r, 0.0, None)
+    dwdr = cubic_spline_normalisation(dim, h) * (-0.5 * a * a + 2.0 * b * b) / h
+    f = np.where(r > 0.0, dwdr / np.where(r > 0.0, r, 1.0), 0.0)
+    return float(-(f * d[:, 0] ** 2).sum())
 
 
 STANDARD_GRAVITY = 9.81
@@ -180,10 +227,37 @@ def linear_fit_at_origin(s, sp, m0, m1, m2, c00, c01, c02, c11, c12, c22, r0, r1
     return (sp - m0 * beta0 - m1 * beta1) / s
 
 
+@kernel
+def pair_correction(m0, m1, m2, m3, m4, m5, den, kappa, is3d):
+    """L = kappa M^-1 (Bonet & Lok 1999, eq. 45's renormalisation matrix times the lattice
+    normalisation kappa), M = -sum_b V_b (W'/r) d (x) d over a water particle's soil neighbours (6
+    components, solver/tensors.py order), blended to the identity where the soil support is cut
+    (Shepard sum den below FULL_SUPPORT) or M is near singular. Returns L's 6 components."""
+    lo, hi = FULL_SUPPORT
+    s = min(max((den - lo) / (hi - lo), 0.0), 1.0)
+    if is3d is None:
+        det = m0 * m1 - m3 * m3
+        i0, i1, i2, i3, i4, i5 = m1, m0, 0.0, -m3, 0.0, 0.0
+    else:
+        i0 = m1 * m2 - m4 * m4
+        i1 = m0 * m2 - m5 * m5
+        i2 = m0 * m1 - m3 * m3
+        i3 = m4 * m5 - m3 * m2
+        i4 = m3 * m5 - m0 * m4
+        i5 = m3 * m4 - m1 * m5
+        det = m0 * i0 + m3 * i3 + m5 * i5
+    scale = kappa ** (3 if is3d is not None else 2)
+    if not det > 0.25 * scale:  # a support cut to half in some direction: no correction
+        s = 0.0
+    c = s * kappa / det if s > 0.0 else 0.0
+    return (1.0 - s + c * i0, 1.0 - s + c * i1, (1.0 - s + c * i2) if is3d is not None else 1.0,
+            c * i3, c * i4, c * i5)  # fmt: skip
+
+
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
                      acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
-                     linear=None):  # fmt: skip
+                     linear=None, corr=None, kappa=0.0):  # fmt: skip
     """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
     F = W'(r) / r):
       * with p and pore (mixture): p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab (Shepard, the soil's
@@ -208,6 +282,12 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
     a ridge of RIDGE times the mean variance against a support with no spread in some direction):
     exact for a linear p~ where Shepard's is off by grad p . (centroid - x_a), which at a cut soil
     support (a bed's free surface under water) is O(h) (docs/seepage.md, case 4).
+      * with corr (mixture, corrected): the buoyancy of the pair carries L_a, the kernel-gradient
+        correction pair_correction builds from M_a = -sum_b V_b F d (x) d and kappa, written into
+        corr[a] for the soil side: the water then reads kappa (1 - n) grad p from the pair at any
+        offset of its lattice from the skeleton's, what its own pressure pass reads (docs/seepage.md,
+        case 2). L_a multiplies the pair's vector d, one matrix per pair, so the soil side (which
+        reads corr[a]) sums the same pair terms: still equal and opposite.
     Returns the largest lambda_a = sum_b K_ab / m_a. wall: the fixed flags (None without fixed
     blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
     and nothing else. one_soil: the material id when the scene has one soil material (then the
@@ -226,7 +306,8 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
         f0 = f1 = f2 = lam = 0.0
         den = num = q0 = q1 = q2 = g0 = g1 = g2 = 0.0
         phi = s0 = s1 = s2 = b0 = b1 = b2 = div = 0.0
-        m0 = m1 = m2 = c00 = c01 = c02 = c11 = c12 = c22 = r0 = r1 = r2 = 0.0  # linear p^ only
+        l0 = l1 = l2 = c00 = c01 = c02 = c11 = c12 = c22 = r0 = r1 = r2 = 0.0  # linear p^ only
+        m0 = m1 = m2 = m3 = m4 = m5 = 0.0
         for s in range(first, last):
             b = index[s]
             if one_soil is None:
@@ -266,9 +347,9 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
                     q1 += sf * d1
                     q2 += sf * d2
                 if linear is not None:
-                    m0 += vw * d0
-                    m1 += vw * d1
-                    m2 += vw * d2
+                    l0 += vw * d0
+                    l1 += vw * d1
+                    l2 += vw * d2
                     c00 += vw * d0 * d0
                     c01 += vw * d0 * d1
                     c02 += vw * d0 * d2
@@ -278,6 +359,14 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
                     r0 += vw * (pore[b] - p0) * d0
                     r1 += vw * (pore[b] - p0) * d1
                     r2 += vw * (pore[b] - p0) * d2
+                if corr is not None:
+                    m0 -= vf * d0 * d0
+                    m1 -= vf * d1 * d1
+                    m3 -= vf * d0 * d1
+                    if is3d is not None:
+                        m2 -= vf * d2 * d2
+                        m4 -= vf * d1 * d2
+                        m5 -= vf * d0 * d2
             if drho is not None:
                 phi += mass[b] / grain_density[mb] * w
                 s0 += vw * u0
@@ -296,13 +385,23 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
                 sp = num - p0 * den
                 three = is3d is not None
                 p_hat = p0 + linear_fit_at_origin(
-                    den, sp, m0, m1, m2, c00, c01, c02, c11, c12, c22, r0, r1, r2, three
+                    den, sp, l0, l1, l2, c00, c01, c02, c11, c12, c22, r0, r1, r2, three
                 )
             pore[a] = p_hat
             excess = p_hat - p0
-            f0 -= excess * q0 - g0  # buoyancy / V_a along d: -sum_b phi_b V_b (p^_a - p~_b) F d
-            f1 -= excess * q1 - g1
-            f2 -= excess * q2 - g2
+            e0 = excess * q0 - g0  # buoyancy / V_a along d: -sum_b phi_b V_b (p^_a - p~_b) F d
+            e1 = excess * q1 - g1
+            e2 = excess * q2 - g2
+            if corr is not None:
+                c0, c1, c2, c3, c4, c5 = pair_correction(m0, m1, m2, m3, m4, m5, den, kappa, is3d)
+                corr[a, 0], corr[a, 1], corr[a, 2] = c0, c1, c2
+                corr[a, 3], corr[a, 4], corr[a, 5] = c3, c4, c5
+                e0, e1, e2 = (
+                    c0 * e0 + c3 * e1 + c5 * e2, c3 * e0 + c1 * e1 + c4 * e2, c5 * e0 + c4 * e1 + c2 * e2
+                )  # fmt: skip
+            f0 -= e0
+            f1 -= e1
+            f2 -= e2
         if wall is not None and wall[a]:
             continue  # a wall particle: p^ only
         vol_a = mass[a] / rho[a]
@@ -321,7 +420,7 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
 
 @kernel(parallel=True)
 def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, pore=None,
-                    is3d=None, wall=None):  # fmt: skip
+                    is3d=None, wall=None, corr=None):  # fmt: skip
     """Soil rows b, one loop over their water neighbours a: add sum_a F_ab / m_b (the pair force of
     the module docstring) with pore holding p^ on the water rows (seepage_on_water) and p~ on the
     soil rows (pore_pressure_at_soil); None in the seed formulation (no buoyancy):
@@ -329,7 +428,8 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
     (u = v_a - v_b, d = x_b - x_a, F = W'(r) / r). The water side sums the same pair terms: equal
     and opposite to round-off. Returns the largest relaxation rate lambda_b = sum_a K_ab / m_b.
     wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are
-    walls, not pore water, and take no part in the coupling."""
+    walls, not pore water, and take no part in the coupling. corr: the water side's L_a (corrected
+    mixture; None otherwise): the buoyancy's d becomes L_a d, as on the water side."""
     worst = 0.0
     for t in prange(targets.shape[0]):
         b = targets[t]
@@ -356,9 +456,14 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
                 w2 += vw * (v[a, 2] - vb2)
             if pore is not None:
                 vfp = vol_a * cubic_spline_dwdr(r, h, norm) / r * (pore[a] - p_b)
-                g0 += vfp * d0
-                g1 += vfp * d1
-                g2 += vfp * d2
+                if corr is None:
+                    g0 += vfp * d0
+                    g1 += vfp * d1
+                    g2 += vfp * d2
+                else:
+                    g0 += vfp * (corr[a, 0] * d0 + corr[a, 3] * d1 + corr[a, 5] * d2)
+                    g1 += vfp * (corr[a, 3] * d0 + corr[a, 1] * d1 + corr[a, 4] * d2)
+                    g2 += vfp * (corr[a, 5] * d0 + corr[a, 4] * d1 + corr[a, 2] * d2)
         mb = material[b]
         vol_b = mass[b] / rho[b]
         k = vol_b * drag[mb]
@@ -409,8 +514,10 @@ class _Coupling(Term):
         super().__init__()
         self.settings = settings
         self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
+        if settings.corrected:
+            self.fields = {"pair_correction": PAIR_CORRECTION}
         if settings.walls:  # wall particles of fixed water blocks are walls, not pore water
-            self.fields = {"fixed": FIXED}
+            self.fields = {**self.fields, "fixed": FIXED}
             self.reads += ("fixed",)
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
@@ -424,6 +531,14 @@ class _Coupling(Term):
                 Equation(
                     "pore pressure on the skeleton -(1 - n) V_a V_b (p^_a - p~_b) grad W",
                     "Bui & Nguyen (2017)",
+                )
+            )
+        if settings.corrected:
+            equations.append(
+                Equation(
+                    f"buoyancy pair's grad W times L_a = kappa M_a^-1, kappa = {settings.kappa:.4f} (the "
+                    "water's own pass on a lattice)",
+                    "Bonet & Lok (1999) eq. 45",
                 )
             )
         self.equations = tuple(equations)
@@ -448,7 +563,7 @@ class SeepageOnWater(_Coupling):
         super().__init__(settings)
         if settings.mixture:
             self.fields = {**self.fields, "pore_pressure": PORE_PRESSURE}
-            self.writes = ("pore_pressure",)
+            self.writes = ("pore_pressure",) + (("pair_correction",) if settings.corrected else ())
             self.adds_to = ("acc", "drho")
             self.equations = (
                 Equation(
@@ -476,6 +591,7 @@ class SeepageOnWater(_Coupling):
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
             ps["fixed"] if st.walls else None, st.one_soil, True if st.linear and mix else None,
+            ps["pair_correction"] if st.corrected else None, st.kappa,
         )  # fmt: skip
 
 
@@ -494,6 +610,8 @@ class SeepageOnSoil(_Coupling):
 
     def __init__(self, settings):
         super().__init__(settings)
+        if settings.corrected:
+            self.reads += ("pair_correction",)
         self.lam = 0.0  # the largest relaxation rate of the soil side at the last step
         self.dt_limit = Constraint("seepage drag", "dt <= cfl.drag / (lambda_soil + lambda_water)", None)
 
@@ -507,5 +625,5 @@ class SeepageOnSoil(_Coupling):
         self.lam = seepage_on_soil(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
             st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if st.mixture else None, ctx.is3d,
-            ps["fixed"] if st.walls else None,
+            ps["fixed"] if st.walls else None, ps["pair_correction"] if st.corrected else None,
         )  # fmt: skip
