@@ -255,12 +255,17 @@ SAND = Grains("medium sand (k = 1e-3 m/s via Hazen)", d50=0.5e-3, d90=1.0e-3, d9
 PARTICLE = Grains("SPH particle spacing 5 mm", d50=5e-3, d90=5e-3, d95=5e-3)
 
 
-def threshold_grains(unit_weight: float = 1150.0 * G, dx: float = 0.005, friction_angle_deg: float = 33.0):
+def threshold_grains(
+    unit_weight: float = 1150.0 * G,
+    dx: float = 0.005,
+    friction_angle_deg: float = 33.0,
+    bed: str = "saturated",
+):
     """The uniform grain whose Shields threshold equals the SPH bed's frictional threshold
     (sph_bed_threshold); defaults: the saturated scene (submerged mixture 1150 kg/m^3,
     docs/scour_setup.md sec. 3), 5 mm, 33 deg."""
     d = threshold_equivalent_grain(sph_bed_threshold(unit_weight, dx, friction_angle_deg))
-    return Grains(f"grain with the 5 mm SPH bed's threshold ({1000 * d:.0f} mm)", d50=d, d90=d, d95=d)
+    return Grains(f"grain with the {bed} 5 mm SPH bed's threshold ({1000 * d:.0f} mm)", d50=d, d90=d, d95=d)
 
 
 FORMULAS = {
