@@ -137,3 +137,31 @@ def test_tailwater_override():
     cfd = S.predictions(np.array([0.06, 0.11]), S.PARTICLE, h_tail=[0.0647, 0.1074])
     for name in S.FORMULAS:
         assert np.all(cfd["formulas"][name]["below_bed"] < free["formulas"][name]["below_bed"]), name
+
+
+# ----------------------------------------------------------------------------- grain thresholds
+def test_shields_soulsby_hand_calculation():
+    # Soulsby (1997) eqs. 75-76, d = 1 mm quartz in water: D* = 0.001 (9.81 * 1.65 / 1e-12)^(1/3)
+    # = 25.2959; theta = 0.30 / (1 + 30.355) + 0.055 (1 - exp(-0.50592)) = 0.009568 + 0.021838
+    # = 0.031405; tau = 0.031405 * 1650 * 9.81 * 0.001 = 0.5083 Pa
+    assert float(S.shields_critical(0.001)) == pytest.approx(0.031405, abs=2e-6)
+    assert float(S.critical_shear_stress(0.001)) == pytest.approx(0.50835, abs=1e-4)
+    # coarse grains: the curve's plateau 0.055
+    assert float(S.shields_critical(0.5)) == pytest.approx(0.055, abs=1e-4)
+
+
+def test_threshold_equivalent_grain_inverts_the_threshold():
+    for d in (2e-4, 5e-3, 0.04):
+        tau = float(S.critical_shear_stress(d))
+        assert S.threshold_equivalent_grain(tau) == pytest.approx(d, rel=1e-9)
+    with pytest.raises(ValueError):
+        S.threshold_equivalent_grain(1e6)
+
+
+def test_sph_bed_threshold_and_its_grain():
+    # saturated mixture 1150 kg/m3 submerged, 5 mm, 33 deg: 1150 * 9.81 * 0.005 * tan 33 = 36.63 Pa
+    tau = S.sph_bed_threshold(1150 * S.G, 0.005, 33.0)
+    assert tau == pytest.approx(1150 * 9.81 * 0.005 * 0.649408, rel=1e-5)
+    g = S.threshold_grains()
+    assert float(S.critical_shear_stress(g.d50)) == pytest.approx(tau, rel=1e-9)
+    assert 0.03 < g.d50 < 0.05  # a coarse gravel: the 5 mm bed is far stronger than sand

@@ -44,3 +44,26 @@ def test_steady_change_over_the_last_half_second():
     assert st.steady_change(case) == pytest.approx(expected)
     assert st.steady_change(case) < st.STEADY_CHANGE
     assert np.isnan(st.steady_change({"t": t[:5], "d": case["d"][:5]}))  # shorter than the window
+
+
+def test_q_exponent_fit_recovers_a_power_law_and_its_scatter():
+    qs = np.array([0.06, 0.07, 0.08, 0.09, 0.10, 0.11])
+    e, se, n = st.q_exponent_fit(qs, 0.3 * qs**0.7)
+    assert (e, n) == (pytest.approx(0.7), 6) and se == pytest.approx(0.0, abs=1e-12)
+    # scatter: the standard error is the textbook one, sqrt(s^2 / Sxx)
+    ds = 0.3 * qs**0.7 * np.array([1.1, 0.9, 1.05, 0.95, 1.0, 1.02])
+    e, se, n = st.q_exponent_fit(qs, ds)
+    x, y = np.log(qs), np.log(ds)
+    b, a = np.polyfit(x, y, 1)
+    s2 = np.sum((y - a - b * x) ** 2) / 4
+    assert se == pytest.approx(np.sqrt(s2 / np.sum((x - x.mean()) ** 2)))
+    assert np.isnan(st.q_exponent_fit(qs[:2], ds[:2])[1])  # two points: no error estimate
+    assert st.q_exponent_fit(qs, np.where(qs > 0.07, ds, 0.0))[2] == 4  # zero depths left out
+
+
+def test_formula_exponents_leave_out_formulas_outside_their_grain_range():
+    fx = st.formula_exponents()
+    assert not any(k.startswith("Veronese 1937 A, medium sand") for k in fx)
+    assert not any(k.startswith("Veronese 1937 B, grain with") for k in fx)
+    assert not any(k.startswith("Tschopp (Bezzola 2012), grain with") for k in fx)  # no scour at q = 0.06
+    assert all(np.all(below > 0) for _, below in fx.values())

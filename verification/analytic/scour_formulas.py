@@ -26,6 +26,16 @@ Sources and how far each was checked here:
   drop-number fits (as quoted by Chanson, Hydraulics of Open Channel Flow, 2004, and the
   NRCS NEH-11 drop-spillway method).
 
+Searched for and not implemented (only abstracts or secondary summaries could be read in the
+stored library, not the coefficients): Bormann & Julien (1991, J. Hydraul. Eng. 117(5)), Stein,
+Julien & Alonso (1993, J. Hydraul. Res. 31(6); abstract: equations for the equilibrium depth and
+its rate of growth, for any bed including cohesive, scour very rapid below 95 % of equilibrium),
+Hoffmans (1998, 2009) and Hoffmans & Verheij (2011, Maritime Eng. 164(4): equilibrium depth from
+Newton's second law for a control volume, Breusers' time scale), Pagliara, Hager & Minor (2006;
+the general form tau + D = K q^a H^b g^c d^e (rho/(rho_s - rho))^f with a static and a dynamic
+equilibrium, as summarised by Pagliara et al., Water 12(3) 718, 2020). docs/scour_study.md lists
+what each would add.
+
 None of these formulas covers our set-up (a 10 mm drop, sand of 0.5 mm or a 5 mm SPH
 continuum): every prediction here is an extrapolation, and validity() says by how much.
 """
@@ -190,6 +200,45 @@ def hole_extent_at_repose(depth, x_deepest, friction_angle_deg):
     return np.asarray(x_deepest, float) - run, np.asarray(x_deepest, float) + run
 
 
+# ----------------------------------------------------------------------------- grain thresholds
+def shields_critical(d, rho_s: float = 2650.0, rho: float = 1000.0, nu: float = 1.0e-6, g: float = G):
+    """Critical Shields parameter of a grain of size d (Soulsby 1997, Dynamics of Marine Sands,
+    eqs. 75-76, after Soulsby & Whitehouse 1997): theta_cr = 0.30 / (1 + 1.2 D*) + 0.055 (1 -
+    exp(-0.020 D*)), D* = d (g (s - 1) / nu^2)^(1/3), s = rho_s / rho."""
+    dstar = np.asarray(d, float) * (g * (rho_s / rho - 1.0) / nu**2) ** (1.0 / 3.0)
+    return 0.30 / (1.0 + 1.2 * dstar) + 0.055 * (1.0 - np.exp(-0.020 * dstar))
+
+
+def critical_shear_stress(d, rho_s: float = 2650.0, rho: float = 1000.0, nu: float = 1.0e-6, g: float = G):
+    """tau_cr = theta_cr (rho_s - rho) g d [Pa] (Shields' definition)."""
+    d = np.asarray(d, float)
+    return shields_critical(d, rho_s, rho, nu, g) * (rho_s - rho) * g * d
+
+
+def threshold_equivalent_grain(tau: float, rho_s: float = 2650.0, rho: float = 1000.0) -> float:
+    """The grain size whose Shields threshold is tau [Pa], by bisection in log d over 1 um - 1 m
+    (tau_cr grows monotonically with d there)."""
+    lo, hi = np.log(1e-6), np.log(1.0)
+    tau_lo, tau_hi = (float(critical_shear_stress(np.exp(x), rho_s, rho)) for x in (lo, hi))
+    if not tau_lo < tau < tau_hi:
+        raise ValueError(f"threshold {tau} Pa outside the grain range 1 um - 1 m")
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if float(critical_shear_stress(np.exp(mid), rho_s, rho)) < tau:
+            lo = mid
+        else:
+            hi = mid
+    return float(np.exp(0.5 * (lo + hi)))
+
+
+def sph_bed_threshold(unit_weight: float, dx: float, friction_angle_deg: float) -> float:
+    """The shear stress [Pa] that moves the SPH bed's top row over the row below it: the
+    Mohr-Coulomb strength at one spacing's depth, gamma dx tan(phi) (gamma: the submerged unit
+    weight of the mixture for saturated soil, the dry unit weight for dry soil; an estimate,
+    docs/scour_study.md)."""
+    return unit_weight * dx * float(np.tan(np.radians(friction_angle_deg)))
+
+
 # ----------------------------------------------------------------------------- our set-up
 @dataclass(frozen=True)
 class Grains:
@@ -204,6 +253,20 @@ class Grains:
 
 SAND = Grains("medium sand (k = 1e-3 m/s via Hazen)", d50=0.5e-3, d90=1.0e-3, d95=1.2e-3)
 PARTICLE = Grains("SPH particle spacing 5 mm", d50=5e-3, d90=5e-3, d95=5e-3)
+
+
+def threshold_grains(
+    unit_weight: float = 1150.0 * G,
+    dx: float = 0.005,
+    friction_angle_deg: float = 33.0,
+    bed: str = "saturated",
+):
+    """The uniform grain whose Shields threshold equals the SPH bed's frictional threshold
+    (sph_bed_threshold); defaults: the saturated scene (submerged mixture 1150 kg/m^3,
+    docs/scour_setup.md sec. 3), 5 mm, 33 deg."""
+    d = threshold_equivalent_grain(sph_bed_threshold(unit_weight, dx, friction_angle_deg))
+    return Grains(f"grain with the {bed} 5 mm SPH bed's threshold ({1000 * d:.0f} mm)", d50=d, d90=d, d95=d)
+
 
 FORMULAS = {
     "Schoklitsch 1932": lambda hy, gr: schoklitsch_1932(hy.q, hy.head_drop, gr.d90),
