@@ -21,6 +21,7 @@ set-up.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -106,27 +107,38 @@ def _start(root, kind, cpu, slowdown=None):
     env.pop("SCOURSPH_BENCH_SLOWDOWN", None)
     if slowdown:
         env["SCOURSPH_BENCH_SLOWDOWN"] = str(slowdown)
-    return subprocess.Popen(
+    # stderr to a file, not a pipe nobody reads during the rounds (a full pipe would block the child)
+    errors = tempfile.TemporaryFile(mode="w+")
+    proc = subprocess.Popen(
         [sys.executable, "-c", CHILD, str(root), kind, str(cpu)],
         env=env,
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
+        stderr=errors,
         text=True,
         bufsize=1,
     )
+    proc.errors, proc.what = errors, f"{kind} benchmark in {root}"
+    return proc
 
 
-def _ready(proc, root, kind):
-    line = proc.stdout.readline()
-    if line.strip() != "ready":
-        err = proc.stderr.read().strip().splitlines()[-1:]
-        raise RuntimeError(f"{kind} benchmark in {root} did not start: {err}")
+def _failed(proc, doing):
+    proc.errors.seek(0)
+    last = proc.errors.read().strip().splitlines()[-1:]
+    return RuntimeError(f"{proc.what} {doing}: {last[0] if last else 'no message'}")
+
+
+def _ready(proc):
+    if proc.stdout.readline().strip() != "ready":
+        raise _failed(proc, "did not start")
 
 
 def _call(proc):
     proc.stdin.write("go\n")
-    return float(proc.stdout.readline())
+    line = proc.stdout.readline()
+    if not line:
+        raise _failed(proc, "stopped")
+    return float(line)
 
 
 def alternating_times(name, reference, current=ROOT, slowdown=None, rounds=ROUNDS):
@@ -136,8 +148,8 @@ def alternating_times(name, reference, current=ROOT, slowdown=None, rounds=ROUND
     cpu = max(os.sched_getaffinity(0))  # both on one core: this host's two vCPUs differ in speed
     ref, new = _start(reference, kind, cpu), _start(current, kind, cpu, slowdown)
     try:
-        _ready(ref, reference, kind)
-        _ready(new, current, kind)
+        _ready(ref)
+        _ready(new)
         out = []
         for k in range(rounds):
             if k % 2 == 0:
@@ -152,6 +164,7 @@ def alternating_times(name, reference, current=ROOT, slowdown=None, rounds=ROUND
         for p in (ref, new):
             p.stdin.close()
             p.wait()
+            p.errors.close()
 
 
 def measurement(name, reference, current=ROOT, slowdown=None, pairs=PAIRS):
@@ -171,8 +184,6 @@ def main(argv=None):
     ap.add_argument("--slowdown", type=float)
     args = ap.parse_args(argv)
     if args.commit is None:
-        import json
-
         args.commit = json.loads((HERE / "baselines" / "gate.json").read_text())["commit"]
     m = measurement(args.name, reference_tree(args.commit), slowdown=args.slowdown, pairs=args.pairs)
     pairs = ", ".join(f"{r:.3f}" for r in m["pair_ratios"])

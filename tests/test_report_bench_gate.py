@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
@@ -218,3 +220,10 @@ def test_side_by_side_ratio_is_the_median_over_pairs_of_their_rounds(monkeypatch
     monkeypatch.setattr(reference_build, "alternating_times", lambda *a, **k: next(pairs))
     m = reference_build.measurement("water_step", ROOT, ROOT, pairs=3)
     assert abs(m["ratio"] - 1.1) < 1e-12 and abs(m["pair_ratios"][2] - 0.9) < 1e-12
+
+
+def test_side_by_side_child_that_cannot_start_says_which_and_why(tmp_path):
+    """A build whose benchmark cannot start (here a tree with no benchmarks/) stops the measurement
+    with the benchmark, the tree and the child's own last error line, instead of hanging."""
+    with pytest.raises(RuntimeError, match=r"water benchmark in .* did not start: .*No module named"):
+        reference_build.alternating_times("water_step", tmp_path, ROOT, rounds=2)
