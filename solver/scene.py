@@ -378,8 +378,13 @@ class Scene(Strict):
         return self.numerics.h_over_dx * self.scene.spacing
 
     def output_times(self):
+        """The snapshot times; the last is always end_time, so a run reaches end_time even when the
+        listed output.times end before it (a scene run longer with --set scene.end_time=...)."""
         if self.output.times is not None:
-            return np.asarray(sorted(self.output.times), dtype=float)
+            times = np.asarray(sorted(self.output.times), dtype=float)
+            if times[-1] < self.scene.end_time * (1 - 1e-12):
+                times = np.append(times, self.scene.end_time)
+            return times
         n = int(np.floor(self.scene.end_time / self.output.interval + 1e-9))
         times = self.output.interval * np.arange(0, n + 1)
         if times[-1] < self.scene.end_time * (1 - 1e-12):

@@ -402,3 +402,14 @@ def test_threads_below_one_is_bad_input(tmp_path, threads):
 def test_verify_errors_go_to_stderr(tmp_path):
     proc = _cli(tmp_path, "verify", "no_such_case")
     assert proc.returncode == 2 and "unknown verification case" in proc.stderr and proc.stdout == ""
+
+
+def test_a_run_reaches_end_time_past_its_listed_output_times():
+    """scene.end_time is the end of the run: output.times that stop earlier (the seed's figure times in
+    scenes/scour_saturated.toml, 0 to 0.025 s) get end_time appended, not a run cut short at 0.025 s
+    (found 2026-12-02: `--set scene.end_time=0.25` ran to 0.025 s and reported `completed`)."""
+    listed = [0.0, 0.005, 0.01, 0.015, 0.02, 0.025]
+    longer = load_scene(ROOT / "scenes" / "scour_saturated.toml", ["scene.end_time=0.25"])
+    assert list(longer.output_times()) == [*listed, 0.25]
+    as_written = load_scene(ROOT / "scenes" / "scour_saturated.toml")
+    assert list(as_written.output_times()) == listed
