@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import block_points, block_span, block_top
+from .geometry import block_points, block_span, block_top, clear_of_bodies
 from .materials import tait_density
 from .particles import ParticleSet
 from .plan import Plan
@@ -15,6 +15,7 @@ def create_particles(scene: Scene, plan: Plan) -> ParticleSet:
     dim, dx = scene.dim, scene.scene.spacing
     mats = plan.materials
     blocks = [(b, block_points(b, scene)) for b in scene.blocks]
+    blocks = [(b, pts[clear_of_bodies(pts, scene)]) for b, pts in blocks]  # bodies carve the blocks
     n = sum(len(pts) * (2 if b.saturated else 1) for b, pts in blocks)
     particles = ParticleSet(dim, plan.fields, capacity=int(n * 1.3) + 64)
     g_vertical = -scene.scene.gravity[-1]
