@@ -135,3 +135,18 @@ def test_dam_break_checks_fail_loudly_without_openfoam_data(tmp_path, monkeypatc
     res = dam_break.CaseResult("dam_break", 20, 800, 1, 0.0, series)
     with pytest.raises(FileNotFoundError):
         dam_break.checks(res)
+
+
+def test_a_case_module_has_a_help_and_refuses_a_bad_resolution(capsys):
+    """`python -m verification.CASE --help` prints its usage (it raised a ValueError traceback), and a
+    resolution that is not a positive integer exits 2 naming the argument, before anything runs."""
+    from verification import common, seepage_darcy
+
+    with pytest.raises(SystemExit) as done:
+        common.case_main(seepage_darcy, ["--help"])
+    assert done.value.code == 0 and "resolution" in capsys.readouterr().out
+    for bad in (["fine"], ["0"], ["-3"]):
+        with pytest.raises(SystemExit) as done:
+            common.case_main(seepage_darcy, bad)
+        err = capsys.readouterr().err
+        assert done.value.code == 2 and "resolution" in err
