@@ -6,6 +6,7 @@ import itertools
 import json
 import shutil
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -150,3 +151,22 @@ def test_a_case_module_has_a_help_and_refuses_a_bad_resolution(capsys):
             common.case_main(seepage_darcy, bad)
         err = capsys.readouterr().err
         assert done.value.code == 2 and "resolution" in err
+
+
+SCRIPTS = sorted(
+    p.stem for p in (Path(registry.__file__).parent).glob("*.py") if '__name__ == "__main__"' in p.read_text()
+)
+
+
+@pytest.mark.filterwarnings("ignore:.*found in sys.modules:RuntimeWarning")  # runpy: already imported
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_every_verification_script_answers_help(name, monkeypatch, capsys):
+    """`python -m verification.X --help` prints a usage and exits 0 for every script (one started a
+    simulation, three raised a traceback), run in-process as `-m` would."""
+    import runpy
+    import sys
+
+    monkeypatch.setattr(sys, "argv", [name, "--help"])
+    with pytest.raises(SystemExit) as done:
+        runpy.run_module(f"verification.{name}", run_name="__main__", alter_sys=True)
+    assert done.value.code in (0, None) and "usage:" in capsys.readouterr().out

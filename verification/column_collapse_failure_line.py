@@ -28,6 +28,7 @@ verification/column_collapse_artificial_stress.py (positions_r{R}_eps{eps}.npz).
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -143,8 +144,14 @@ def strain_table(x0, x, dx, thresholds=STRAIN_THRESHOLDS):
 
 
 def main(argv=None):
-    argv = sys.argv[1:] if argv is None else argv
-    d = np.load(argv[0])
+    from .common import script_parser
+
+    parser = script_parser(sys.modules[__name__])
+    parser.add_argument("positions", help="an .npz with x0, x (initial and final positions) and dx")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if not Path(args.positions).is_file():
+        parser.error(f"argument positions: {args.positions}: no such file")
+    d = np.load(args.positions)
     x0, x, dx = d["x0"], d["x"], float(d["dx"])
     fail = cc.load_reference()["failure_line"]
     print(

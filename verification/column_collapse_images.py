@@ -87,4 +87,9 @@ def write(table, out=cc.OUT):
 
 
 if __name__ == "__main__":
+    import sys
+
+    from .common import script_parser
+
+    script_parser(sys.modules[__name__]).parse_args()
     write(rows())

@@ -247,26 +247,34 @@ def save_figure(fig, path, dpi=120):
     return path
 
 
-def case_main(module, argv=None):
-    """`python -m verification.CASE [RESOLUTION] [--study]`: one run at RESOLUTION (the case's
-    DEFAULT_RESOLUTION when omitted), or its resolution study. Exit 0 when every check passes, 1 when
-    one fails, 2 on bad arguments (argparse: the argument and the reason on stderr)."""
+def script_parser(module):
+    """The argument parser of `python -m verification.MODULE`, its description the docstring's
+    first line: every verification script answers --help and refuses what it does not know (exit 2)."""
     import argparse
-    import sys
 
     name = getattr(module.__spec__, "name", None) or module.__name__
     doc = (module.__doc__ or "").strip().splitlines()
-    parser = argparse.ArgumentParser(prog=f"python -m {name}", description=doc[0] if doc else None)
+    return argparse.ArgumentParser(prog=f"python -m {name}", description=doc[0] if doc else None)
+
+
+def case_main(module, argv=None, out_dir="runs/verification"):
+    """`python -m verification.CASE [RESOLUTION] [--study]`: one run at RESOLUTION (the case's
+    DEFAULT_RESOLUTION when omitted), or its resolution study. Exit 0 when every check passes, 1 when
+    one fails, 2 on bad arguments (argparse: the argument and the reason on stderr)."""
+    import sys
+
+    parser = script_parser(module)
     parser.add_argument(
         "resolution", nargs="?", type=int, default=module.DEFAULT_RESOLUTION,
         help=f"particles across the case's reference length (default {module.DEFAULT_RESOLUTION}; "
         f"its study: {', '.join(map(str, getattr(module, 'STUDY_RESOLUTIONS', ()))) or 'see the module'})",
     )  # fmt: skip
-    parser.add_argument("--study", action="store_true", help="run the resolution study (every resolution)")
+    if hasattr(module, "study"):
+        parser.add_argument("--study", action="store_true", help="run the resolution study")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     if args.resolution <= 0:
         parser.error(f"argument resolution: must be a positive integer, not {args.resolution}")
-    if args.study:
+    if getattr(args, "study", False):
         rows = module.study()
         for row in rows:
             print(row)
@@ -274,7 +282,7 @@ def case_main(module, argv=None):
         for failure in failures:
             print("  FAIL:", failure)
         return 1 if failures else 0
-    return report(module.run(args.resolution, out_dir="runs/verification"))
+    return report(module.run(args.resolution, out_dir=out_dir))
 
 
 def study_failures(rows):

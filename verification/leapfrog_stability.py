@@ -91,6 +91,11 @@ GROWTH_SCHEMES = {
 
 
 if __name__ == "__main__":
+    import sys
+
+    from .common import script_parser
+
+    script_parser(sys.modules[__name__]).parse_args()
     ws = (0.1, 0.3, 0.5, 1.0, 1.5)
     print("| scheme (growth per step) | " + " | ".join(f"omega dt = {w}" for w in ws) + " |")
     print("|---|" + "---|" * len(ws))

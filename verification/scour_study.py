@@ -230,7 +230,7 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=Fals
         "solver_commit": segment["solver_commit"],
         "segments": segments,
         "body_leaks": report.get("body_leaks"),
-        "wall_reflections": report.get("wall_reflections"),  # the drift's safeguard (issue 15): 0 if walls held
+        "wall_reflections": report.get("wall_reflections"),  # the drift safeguard (issue 15): 0 = walls held
         "volume_balance": report.get("volume_balance"),
     }
     dest.mkdir(parents=True, exist_ok=True)

@@ -460,9 +460,6 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
 if __name__ == "__main__":
     import sys
 
-    from .common import report
+    from .common import case_main
 
-    if "--study" in sys.argv:
-        study()
-    else:
-        sys.exit(report(run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION, out_dir=OUT)))
+    raise SystemExit(case_main(sys.modules[__name__], out_dir=OUT))

@@ -216,6 +216,6 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None):
 if __name__ == "__main__":
     import sys
 
-    r = run(int(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_RESOLUTION)
-    for c in r.checks:
-        print(c.line())
+    from .common import case_main
+
+    raise SystemExit(case_main(sys.modules[__name__]))
