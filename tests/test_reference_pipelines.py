@@ -210,6 +210,15 @@ def test_lobovsky_published_window_mean(tmp_path):
     (tmp_path / "validation_reference_edac_40.json").write_text(__import__("json").dumps(data))
     assert lobo_published.trixi(tmp_path, "edac", 40) == pytest.approx([0.7] * 4)
     assert lobo_published.main([str(tmp_path / "missing")]) == 2
+    assert lobo_published.marrone_buchner(tmp_path) is None
+    (tmp_path / "sim_pressure_sensor_P1.csv").write_text(
+        "time,exp,40,320,80\n2.0,0.5,0.6,0.6,0.6\n7.0,0.5,0.6,0.6,0.6\n"
+    )
+    (tmp_path / "exp_pressure_sensor_P1.csv").write_text("time,P1\n2.0,0.5\n7.0,0.5\n")
+    mb = lobo_published.marrone_buchner(tmp_path)
+    assert mb["Buchner 2002 (experiment)"] == pytest.approx(0.5) and mb[
+        "Marrone et al. 2011 H/320"
+    ] == pytest.approx(0.6)
 
 
 # ----------------------------------------------------------------------------- OpenFOAM seepage

@@ -10,6 +10,9 @@ a720b1d5, not copied into this repository):
   * validation_reference_{wcsph,edac}_{40,80,400}.json: TrixiParticles' own reference runs of the same set-up
     (H = 0.6 m, H/dx = 40, 80, 400; WCSPH with density diffusion, or EDAC; free-slip walls; c0 = 50 sqrt(gH),
     alpha = 0.01 as De Courcy et al.). Keys pressure_P{i}_fluid_1 -> time (s), values (Pa).
+  * optionally, from the repository's history (commit b13455d4, deleted since), sim_pressure_sensor_P1.csv
+    (Marrone et al. 2011, CMAME 200:1526, delta-SPH at H/dx = 40, 80, 320; columns time, exp, 40, 320, 80)
+    and exp_pressure_sensor_P1.csv (Buchner 2002's experiment), sensor P1 centred at 160 mm (0.267 H).
 Their tank is Lobovsky's scaled by 2 (H = 0.6 m, 5.366 H long) and P1-P4 are centred 6, 30, 60, 160 mm above
 the floor, 8.4 mm tall: Lobovsky's sensors 1-4 (3, 15, 30, 80 mm; 4.2 mm) at twice the scale. The models are
 inviscid apart from artificial viscosity, so p* against t* carries over to H = 0.3 m unchanged.
@@ -60,6 +63,21 @@ def trixi(folder: Path, method: str, resolution: int) -> list[float]:
     return out
 
 
+def marrone_buchner(folder: Path) -> dict[str, float] | None:
+    """Window means at Buchner's P1 of Marrone et al.'s curves and of the experiment (if the files exist)."""
+    sim, exp = folder / "sim_pressure_sensor_P1.csv", folder / "exp_pressure_sensor_P1.csv"
+    if not (sim.is_file() and exp.is_file()):
+        return None
+    data = np.genfromtxt(sim, delimiter=",", names=True)
+    out = {
+        f"Marrone et al. 2011 H/{c.lstrip('h')}": window_mean(data["time"], data[c])
+        for c in data.dtype.names[2:]
+    }
+    e = np.genfromtxt(exp, delimiter=",", names=True)
+    out["Buchner 2002 (experiment)"] = window_mean(e["time"], e[e.dtype.names[1]])
+    return out
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1 or not Path(argv[0]).is_dir():
@@ -73,6 +91,11 @@ def main(argv=None) -> int:
         for res in (40, 80, 400):
             vals = " | ".join(f"{v:.3f}" for v in trixi(folder, method, res))
             print(f"| TrixiParticles {method.upper()} H/{res} | {vals} |")
+    extra = marrone_buchner(folder)
+    if extra:
+        print("\nBuchner's P1 (160 mm of H = 0.6 m, Lobovsky's sensor-4 height):")
+        for k, v in extra.items():
+            print(f"  {k}: {v:.3f}")
     return 0
 
 
