@@ -194,6 +194,18 @@ def test_lobovsky_variant_rans(tmp_path):
     assert label == "h20_var_noSlip_nu1e-06_kOmegaSST"
 
 
+def test_lobovsky_variant_no_slip_on_one_wall(tmp_path):
+    """--no-slip-only floor: noSlip on the floor, slip on the two side walls, nothing else changed."""
+    work = tmp_path / "f"
+    lobo_variants.write_variant(work, 8, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "laminar", "floor")
+    u = (work / "0" / "U").read_text()
+    walls = {name: u.split(f"    {name}\n", 1)[1].split("}", 1)[0] for name in lobo_variants.PATCHES}
+    assert "noSlip" in walls["floor"] and "slip;" in walls["leftWall"] and "slip;" in walls["rightWall"]
+    assert "noSlip" not in walls["leftWall"] + walls["rightWall"] and "pressureInletOutletVelocity" in u
+    label = lobo_variants.label_of(20, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "laminar", "floor")
+    assert label == "h20_var_noSlip_onlyfloor_nu1e-06"
+
+
 def test_lobovsky_published_window_mean(tmp_path):
     """published.py: the window mean of an unevenly sampled, unsorted curve, and the files' layout."""
     rng = np.random.default_rng(3)

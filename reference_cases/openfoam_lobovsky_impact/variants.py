@@ -1,7 +1,7 @@
 """Numerical variants of the interFoam Lobovsky tank: what makes the no-slip run's corner eddy (corner.py)?
 
     python -m reference_cases.openfoam_lobovsky_impact.variants --cells-per-H N --walls noSlip|slip
-        [--nu-water NU] [--div-U SCHEME] [--turbulence laminar|kOmegaSST] [--nice 10]
+        [--nu-water NU] [--div-U SCHEME] [--turbulence laminar|kOmegaSST] [--no-slip-only PATCH] [--nice 10]
 
 Each variant is the reference case (run.py, open top) with one change: the water's kinematic viscosity
 (default 1e-6 m^2/s) or the convection scheme of the momentum equation (default "Gauss linearUpwind
@@ -9,7 +9,8 @@ grad(U)", the reference's; "Gauss upwind" uses no reconstruction gradient, so th
 enters the momentum equation only through the viscous term), or the turbulence closure ("laminar", the
 reference's; "kOmegaSST": Menter's k-omega SST RANS model with standard wall functions on the three walls,
 a modelled turbulent wall shear and eddy viscosity in place of the laminar wall layer; TURBULENCE below).
-Its fields go to work/<label> (not in
+With --no-slip-only floor|rightWall the no-slip condition is kept on that wall alone, the other two walls
+slip (which wall's layer starts the corner eddy). Its fields go to work/<label> (not in
 git), its sensor metrics (the impact case's functions, as run.py) and corner numbers (corner.py) to
 one row of data/variants.csv, with the command.
 """
@@ -45,8 +46,11 @@ K0, OMEGA0 = 1e-5, 5.8
 TURB_WALLS = "(leftWall|rightWall|floor)"
 
 
-def label_of(n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar") -> str:
-    tag = f"h{n}_var_{walls}_nu{nu:.0e}"
+PATCHES = ("leftWall", "rightWall", "floor")
+
+
+def label_of(n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar", only: str = "") -> str:
+    tag = f"h{n}_var_{walls}" + (f"_only{only}" if only else "") + f"_nu{nu:.0e}"
     tag += "" if div_u == DEFAULT_DIV_U else "_" + re.sub(r"[^A-Za-z0-9]+", "", div_u.split()[1])
     return tag + ("" if turbulence == "laminar" else "_" + turbulence)
 
@@ -97,8 +101,25 @@ def write_rans(work: Path) -> None:
     fv.write_text(text[: brace + 2] + solver + text[brace + 2 :])
 
 
-def write_variant(work: Path, n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar") -> None:
+def no_slip_only(work: Path, patch: str) -> None:
+    """0/U: noSlip on `patch`, slip on the other two walls (the top is left as it is)."""
+    u = work / "0" / "U"
+    entries = "".join(
+        f"    {name}\n    {{\n        type            {'noSlip' if name == patch else 'slip'};\n    }}\n"
+        for name in PATCHES
+    )
+    text, count = re.subn(r'    "\(leftWall\|rightWall\|floor\)"\s*\{[^}]*\}\n', entries, u.read_text())
+    if count != 1:
+        raise RuntimeError(f"{u}: the walls' entry was not found")
+    u.write_text(text)
+
+
+def write_variant(
+    work: Path, n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar", only: str = ""
+) -> None:
     R.write_case(work, R.case_values(n, R.T_END_STAR * R.TIME_SCALE, walls=walls))
+    if only:
+        no_slip_only(work, only)
     tp = work / "constant" / "transportProperties"
     text = tp.read_text()
     water = text.index("water")
@@ -112,11 +133,13 @@ def write_variant(work: Path, n: int, walls: str, nu: float, div_u: str, turbule
         write_rans(work)
 
 
-def run_variant(n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar") -> dict:
+def run_variant(
+    n: int, walls: str, nu: float, div_u: str, turbulence: str = "laminar", only: str = ""
+) -> dict:
     C.require("blockMesh", "setFields", "interFoam", "postProcess")
-    label = label_of(n, walls, nu, div_u, turbulence)
+    label = label_of(n, walls, nu, div_u, turbulence, only)
     work = R.WORK_DIR / label
-    write_variant(work, n, walls, nu, div_u, turbulence)
+    write_variant(work, n, walls, nu, div_u, turbulence, only)
     logs = work / "logs"
     logs.mkdir()
     cpu0 = os.times()
@@ -130,7 +153,7 @@ def run_variant(n: int, walls: str, nu: float, div_u: str, turbulence: str = "la
     row = {
         "label": label,
         "cells_per_H": n,
-        "walls": walls,
+        "walls": f"noSlip on {only} only, slip elsewhere" if only else walls,
         "nu_water": nu,
         "div_U": div_u,
         "turbulence": turbulence,
@@ -143,7 +166,9 @@ def run_variant(n: int, walls: str, nu: float, div_u: str, turbulence: str = "la
         "command": "python -m reference_cases.openfoam_lobovsky_impact.variants "
         + shlex.join(["--cells-per-H", str(n), "--walls", walls, "--nu-water", f"{nu:g}"])
         + " "
-        + shlex.join(["--div-U", div_u, "--turbulence", turbulence]),
+        + shlex.join(
+            ["--div-U", div_u, "--turbulence", turbulence] + (["--no-slip-only", only] if only else [])
+        ),
     }
     new = not OUT.is_file()
     with open(OUT, "a", newline="") as fh:
@@ -161,15 +186,19 @@ def main(argv=None) -> int:
     p.add_argument("--nu-water", type=float, default=1e-6)
     p.add_argument("--div-U", default=DEFAULT_DIV_U)
     p.add_argument("--turbulence", choices=("laminar", "kOmegaSST"), default="laminar")
+    p.add_argument("--no-slip-only", choices=("floor", "rightWall"), default="")
     p.add_argument("--nice", type=int, default=0)
     a = p.parse_args(argv)
     if a.nu_water < 0:
         print("--nu-water: must be >= 0", file=sys.stderr)
         return 2
+    if a.no_slip_only and a.walls != "noSlip":
+        print("--no-slip-only: needs --walls noSlip", file=sys.stderr)
+        return 2
     if a.nice:
         os.nice(a.nice)
     t0 = time.perf_counter()
-    row = run_variant(a.cells_per_H, a.walls, a.nu_water, a.div_U, a.turbulence)
+    row = run_variant(a.cells_per_H, a.walls, a.nu_water, a.div_U, a.turbulence, a.no_slip_only)
     print({k: v for k, v in row.items() if k != "command"}, f"wall {time.perf_counter() - t0:.0f} s")
     return 0
 
