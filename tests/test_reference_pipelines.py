@@ -19,6 +19,7 @@ from reference_cases.liggghts_column_collapse_2d import calibrate as dem_cal
 from reference_cases.liggghts_column_collapse_2d import run as dem
 from reference_cases.openfoam_dam_break_2d import run as cfd
 from reference_cases.openfoam_lobovsky_impact import corner as lobo_corner
+from reference_cases.openfoam_lobovsky_impact import published as lobo_published
 from reference_cases.openfoam_lobovsky_impact import run as lobo
 from reference_cases.openfoam_lobovsky_impact import variants as lobo_variants
 from reference_cases.openfoam_overflow_nappe import run as nappe
@@ -170,6 +171,66 @@ def test_lobovsky_variant_edits_one_thing(tmp_path):
     assert "div(rhoPhi,U)   Gauss upwind;" in fs and "linearUpwind" not in fs
     assert lobo_variants.label_of(8, "noSlip", 1e-8, "Gauss upwind") == "h8_var_noSlip_nu1e-08_upwind"
     assert lobo_variants.label_of(20, "slip", 1e-6, lobo_variants.DEFAULT_DIV_U) == "h20_var_slip_nu1e-06"
+
+
+def test_lobovsky_variant_rans(tmp_path):
+    """--turbulence kOmegaSST switches the closure and adds k, omega, nut with wall functions; the
+    momentum scheme and the water stay the reference's."""
+    work = tmp_path / "r"
+    lobo_variants.write_variant(work, 8, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "kOmegaSST")
+    tp = (work / "constant" / "turbulenceProperties").read_text()
+    assert "simulationType RAS;" in tp and "RASModel kOmegaSST;" in tp
+    for name, wall in (("k", "kqRWallFunction"), ("omega", "omegaWallFunction"), ("nut", "nutkWallFunction")):
+        text = (work / "0" / name).read_text()
+        assert f"type {wall};" in text and "frontAndBack" in text
+        dims = text.split("dimensions", 1)[1].split(";", 1)[0]
+        assert len(dims.strip(" []").split()) == 7, dims
+    fs = (work / "system" / "fvSchemes").read_text()
+    assert "div(phi,k)" in fs and "div(phi,omega)" in fs and "wallDist" in fs
+    assert f"div(rhoPhi,U)   {lobo_variants.DEFAULT_DIV_U};" in fs
+    assert '"(k|omega).*"' in (work / "system" / "fvSolution").read_text()
+    assert "nu              1e-06;" in (work / "constant" / "transportProperties").read_text()
+    label = lobo_variants.label_of(20, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "kOmegaSST")
+    assert label == "h20_var_noSlip_nu1e-06_kOmegaSST"
+
+
+def test_lobovsky_variant_no_slip_on_one_wall(tmp_path):
+    """--no-slip-only floor: noSlip on the floor, slip on the two side walls, nothing else changed."""
+    work = tmp_path / "f"
+    lobo_variants.write_variant(work, 8, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "laminar", "floor")
+    u = (work / "0" / "U").read_text()
+    walls = {name: u.split(f"    {name}\n", 1)[1].split("}", 1)[0] for name in lobo_variants.PATCHES}
+    assert "noSlip" in walls["floor"] and "slip;" in walls["leftWall"] and "slip;" in walls["rightWall"]
+    assert "noSlip" not in walls["leftWall"] + walls["rightWall"] and "pressureInletOutletVelocity" in u
+    label = lobo_variants.label_of(20, "noSlip", 1e-6, lobo_variants.DEFAULT_DIV_U, "laminar", "floor")
+    assert label == "h20_var_noSlip_onlyfloor_nu1e-06"
+
+
+def test_lobovsky_published_window_mean(tmp_path):
+    """published.py: the window mean of an unevenly sampled, unsorted curve, and the files' layout."""
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(2.0, 7.0, 400))
+    t = np.concatenate(([2.0, 7.0], t))[::-1]  # unsorted, covers the window
+    assert abs(lobo_published.window_mean(t, 2.0 * t + 1.0) - (2.0 * 4.25 + 1.0)) < 1e-3  # linear: exact
+    for i in range(1, 5):
+        (tmp_path / f"decourcy_pressure_sensor_P{i}.csv").write_text("time,P\n2.0,0.5\n7.0,0.5\n")
+    assert lobo_published.decourcy(tmp_path) == pytest.approx([0.5] * 4)
+    scale = np.sqrt(lobo_published.G / lobo_published.H_TRIXI)
+    p = 0.7 * lobo_published.RHO * lobo_published.G * lobo_published.H_TRIXI
+    series = {"time": [2.0 / scale, 7.0 / scale], "values": [p, p]}
+    data = {f"pressure_P{i}_fluid_1": series for i in range(1, 5)}
+    (tmp_path / "validation_reference_edac_40.json").write_text(__import__("json").dumps(data))
+    assert lobo_published.trixi(tmp_path, "edac", 40) == pytest.approx([0.7] * 4)
+    assert lobo_published.main([str(tmp_path / "missing")]) == 2
+    assert lobo_published.marrone_buchner(tmp_path) is None
+    (tmp_path / "sim_pressure_sensor_P1.csv").write_text(
+        "time,exp,40,320,80\n2.0,0.5,0.6,0.6,0.6\n7.0,0.5,0.6,0.6,0.6\n"
+    )
+    (tmp_path / "exp_pressure_sensor_P1.csv").write_text("time,P1\n2.0,0.5\n7.0,0.5\n")
+    mb = lobo_published.marrone_buchner(tmp_path)
+    assert mb["Buchner 2002 (experiment)"] == pytest.approx(0.5) and mb[
+        "Marrone et al. 2011 H/320"
+    ] == pytest.approx(0.6)
 
 
 # ----------------------------------------------------------------------------- OpenFOAM seepage

@@ -124,6 +124,16 @@ TIME_SCALE = math.sqrt(H / G)
 OPENFOAM_CASE = reference_case_dir("openfoam_lobovsky_impact")
 PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
 PLATEAU_MEAN_2D = "plateau mean p* at sensor 2, t* 3-5.5, minus 2D interFoam with the same free-slip walls"
+# Published 2D free-slip computations of this tank: plateau mean at sensor 2 over t* 3-5.5 (reported beside
+# check 2b, not checked; reference_cases/openfoam_lobovsky_impact/README.md, "What published 2D computations
+# get", and its published.py): De Courcy et al. (2024, CMAME 420:116700) delta-SPH at H/400, as digitised by
+# TrixiParticles; TrixiParticles' own WCSPH and EDAC reference runs at H/400 (validation/dam_break_2d, commit
+# a720b1d5).
+PUBLISHED_2D_FREE_SLIP = {
+    "De Courcy et al. 2024, delta-SPH H/400": 0.923,
+    "TrixiParticles WCSPH H/400": 0.906,
+    "TrixiParticles EDAC H/400": 0.921,
+}
 # Checks expected to fail until the model changes (the nightly report shows them as known failures and
 # flags them if they pass, like the strict xfail in tests/test_verification.py)
 KNOWN_FAILURES = {
@@ -131,13 +141,15 @@ KNOWN_FAILURES = {
     "the foot of the far wall; the SPH keeps the unseparated stagnation corner and lies above the "
     "repetitions' band (+0.21 / +0.24 / +0.28 at H/20 / H/40 / H/80), as 2D interFoam does with slip walls "
     "(+0.31) or with no-slip walls and upwind convection (+0.32); interFoam's no-slip runs separate and lie "
-    "in the band through linearUpwind's wall-value gradient, not viscosity "
+    "in the band through linearUpwind's wall-value gradient, not viscosity; every published 2D free-slip "
+    "computation found gives 0.91-0.92 (PUBLISHED_2D_FREE_SLIP) "
     "(reference_cases/openfoam_lobovsky_impact/README.md). No-slip SPH walls (0.766 / 0.850) and the log-law "
     "wall function (walls='wall_function') do not separate it at these particle sizes "
     "(verification/results/impact_pressure/README.md)",
     PLATEAU_MEAN_2D: "SPH converges toward 2D interFoam with the same free-slip walls (0.925) from below: "
     "-0.11 / -0.07 / -0.03 at H/20 / H/40 / H/80, more than the first-order allowance from H/20-H/40 "
-    "at H/20 (reference_cases/openfoam_lobovsky_impact/README.md)",
+    "at H/20, at the rate of another code's WCSPH (TrixiParticles 0.842 / 0.887 / 0.906 at H/40 / H/80 / "
+    "H/400) (reference_cases/openfoam_lobovsky_impact/README.md)",
 }
 
 
@@ -505,6 +517,11 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir="runs/verification", scheme="defa
             "(reference_cases/openfoam_lobovsky_impact); "
             f"its mesh uncertainty {foam_u:.3f} + SPH discretisation {e_mean:.3f}",
         )
+    )
+    res.notes.append(
+        "published 2D free-slip computations, not the experiment: plateau mean at sensor 2 "
+        + ", ".join(f"{k} {v:.3f}" for k, v in PUBLISHED_2D_FREE_SLIP.items())
+        + " (reference_cases/openfoam_lobovsky_impact/README.md)"
     )
     noslip, noslip_u, noslip_n = openfoam_plateau_mean(sim_run["c0"], walls="noSlip")
     res.notes.append(
