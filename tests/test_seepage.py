@@ -12,12 +12,10 @@ from solver.kernels import cubic_spline_normalisation
 from solver.materials import Phase
 from solver.neighbors import CellGrid, CellList
 from solver.physics.seepage import (
-    CHUNKS,
     lattice_gradient_normalisation,
     pore_pressure_at_soil,
     seepage_on_soil,
     seepage_on_water,
-    soil_side,
 )
 from solver.plan import build_plan, explain
 from solver.scene import parse_scene
@@ -67,31 +65,24 @@ def _pore(s):
     return pore
 
 
-def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None, kappa=0.0, chunks=CHUNKS,
-           pore_elsewhere=None):  # fmt: skip
+def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None, kappa=0.0):
     """Both sides in the solver's order: p~ at the soil, the water side (which writes p^ on the
-    water rows in the mixture form and sums the soil side of its pairs), then the soil side (the
-    water side's sums and its pairs with water that is not the water side's target). Returns acc,
-    drho, the two relaxation rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
+    water rows in the mixture form), then the soil side. Returns acc, drho, the two relaxation
+    rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
     n, dim = len(s["x"]), s["dim"]
     acc, drho = np.zeros((n, dim)), np.zeros(n)
     pore = _pore(s) if mixture else None
     is3d = True if dim == 3 else None
     solid = s["solid"] if mixture else np.zeros(3)
     corr = np.zeros((n, 6)) if kappa > 0 else None
-    split = soil_side(s["on_water"], s["on_soil"], n, dim, chunks=chunks)
     lam_w = seepage_on_water(
         s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
-        s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc, split.slot, split.chunks,
-        split.lo, split.hi, split.sums, drho if storage else None, s["p"] if mixture else None, pore, is3d,
-        wall, one_soil, linear, corr, kappa,
+        s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc, drho if storage else None,
+        s["p"] if mixture else None, pore, is3d, wall, one_soil, linear, corr, kappa,
     )  # fmt: skip
-    if pore_elsewhere is not None:  # rows that are not the water side's targets (ghosts): p^ from their owner
-        pore[pore_elsewhere[0]] = pore_elsewhere[1]
     lam_s = seepage_on_soil(
-        s["on_soil"].targets, split.rest_start, split.rest_index, s["x"], s["v"], s["rho"], s["mass"],
-        s["material"], s["drag"], solid, s["h"], s["norm"], acc, split.lo, split.hi, split.sums, pore, is3d,
-        wall, corr,
+        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall, corr,
     )  # fmt: skip
     if kappa > 0:
         s["corr"] = corr
@@ -261,44 +252,6 @@ def test_wall_particles_take_no_part_in_the_coupling(rng):
     np.testing.assert_allclose(pore, exp_pore, rtol=1e-12)
     np.testing.assert_allclose(acc, exp_acc, rtol=1e-11, atol=1e-13 * np.abs(exp_acc).max())
     assert not drho[wall].any() and drho[free].any()
-
-
-@pytest.mark.parametrize("dim,mixture", [(2, True), (2, False), (3, True)])
-def test_soil_side_of_pairs_with_ghost_water_matches_twin(rng, dim, mixture):
-    """The soil side sums a pair in the water side's pass when the water is the water side's target
-    (owned) and in its own pass otherwise (ghost and image water, which another rank or no one runs):
-    with 40 % of the water taken out of the water side's targets (their p^ given, as the halo
-    exchange gives it), the soil rates still equal the twin's over all the water, the remaining
-    water rows too, and the others get nothing."""
-    s = two_phase(rng, dim, n_side=10 if dim == 2 else 5)
-    exp_pore, exp_acc, exp_ls, _ = _expected(s, mixture)
-    owned = rng.random(len(s["water"])) < 0.6
-    targets, ghosts = s["water"][owned], s["water"][~owned]
-    radius = s["radius"]
-    cells = CellList(CellGrid.covering(np.zeros(dim), np.full(dim, 10 * 0.01), radius, pad=radius))
-    cells.bin(s["x"], len(s["x"]))
-    phase = np.where(s["material"] == 0, 0, 1).astype(np.int32)
-    s["on_water"] = cells.neighbour_list(s["x"], targets.astype(np.int64), radius, phase, 1)
-    elsewhere = (ghosts, exp_pore[ghosts]) if mixture else None
-    acc, _, lam_s, _, _ = _rates(s, mixture=mixture, storage=False, pore_elsewhere=elsewhere)
-    scale = np.abs(exp_acc).max()
-    for rows in (s["soil"], targets):
-        np.testing.assert_allclose(acc[rows], exp_acc[rows], rtol=1e-11, atol=1e-13 * scale)
-    assert not acc[ghosts].any()
-    assert lam_s == pytest.approx(exp_ls, rel=1e-12)
-
-
-@pytest.mark.parametrize("mixture", [True, False])
-def test_soil_sums_do_not_depend_on_the_chunking_beyond_round_off(rng, mixture):
-    """The water side's rows in 1, 3 or CHUNKS chunks (each its own soil sums, added in chunk order):
-    the same rates to round-off."""
-    s = two_phase(rng)
-    one = _rates(s, mixture=mixture, chunks=1)
-    for chunks in (3, CHUNKS):
-        got = _rates(s, mixture=mixture, chunks=chunks)
-        np.testing.assert_allclose(got[0], one[0], rtol=1e-13, atol=1e-14 * np.abs(one[0]).max())
-        np.testing.assert_array_equal(got[1], one[1])  # the water side's own sums: unchanged
-        assert got[2] == pytest.approx(one[2], rel=1e-14) and got[3] == one[3]
 
 
 @pytest.mark.parametrize("mixture", [True, False])

@@ -34,14 +34,12 @@ The drag is explicit and its stiffness limits the step: the relaxation rate of a
 velocity is lambda = lambda_a + lambda_b, lambda_i = sum_j K_ij / m_i (~ n g / k (1 + n rho_w /
 rho_s)); dt <= cfl.drag / lambda_max (numerics.cfl.drag), evaluated every step from these sums.
 
-Two sweeps over the soil-water pairs (docs/seepage.md, "Speed"): p~ at the soil (Shepard, state
-stage); the water side, which interpolates p^ back onto the water and sums its pair forces and Biot's
-storage in one loop over a water row's soil neighbours (the buoyancy sums split around p^_a, which
-is not known until the loop ends), then, in a second loop over the same row with the kernel values
-kept from the first, the soil side of those pairs into per-chunk sums. The soil side ("seepage on
-soil") adds these sums up and runs only its pairs with ghost and image water, whose p^ and L the
-plan refreshes after the water side (it derives that from what each term reads and writes). The
-chunks (CHUNKS, fixed) keep the soil's sums free of races and independent of the thread count.
+Three passes, one loop over the pairs each (docs/seepage.md, "Speed"): p~ at the soil (Shepard,
+state stage); the water side, which interpolates p^ back onto the water and sums its pair forces
+and Biot's storage in the same loop (the buoyancy sums split around p^_a, which is not known
+until the loop ends); the soil side, pair by pair. p~ and p^ are refreshed on ghosts and images
+in between (the plan derives it from what each term reads and writes). Per-row gathering needs no
+atomics and serves ghost and image neighbours as they are.
 """
 
 from __future__ import annotations
@@ -160,54 +158,6 @@ STANDARD_GRAVITY = 9.81
 C = n^2 rho_w g / k (= n^2 mu / k_intrinsic) keeps its value (as Morikawa & Asai 2022 do)."""
 
 
-CHUNKS = 8
-"""The water side's rows run in this many chunks (balanced by pair count, soil_side), each adding its
-pairs' soil side into its own sums: the soil's sums then do not depend on the thread count, and up to
-CHUNKS threads share the pass."""
-
-
-@dataclass
-class SoilSide:
-    """Who sums which soil-water pair for the soil side, for one set of neighbour lists (a rebuild):
-    the water side, for the soil rows' owned water neighbours (the targets of its list), into sums;
-    seepage_on_soil itself for the rest (ghost and image water), from rest_start/rest_index."""
-
-    lists: tuple  # the (water <- soil, soil <- water) lists this was built from
-    slot: np.ndarray  # int32 per row: its index among the soil targets, -1 for any other row
-    chunks: np.ndarray  # int64[CHUNKS + 1]: water targets chunks[c]..chunks[c + 1] - 1 form chunk c
-    lo: np.ndarray  # int64[CHUNKS]: chunk c's pairs reach the soil targets lo[c]..hi[c] - 1
-    hi: np.ndarray
-    sums: np.ndarray  # float64[CHUNKS, soil targets, 1 + 2 dim]: each chunk's soil-side sums
-    rest_start: np.ndarray  # compressed rows over the soil targets: their other water neighbours
-    rest_index: np.ndarray
-
-
-def soil_side(on_water, on_soil, n_rows, dim, chunks=CHUNKS):
-    """The SoilSide of a pair of lists (at each neighbour rebuild: O(pairs) NumPy)."""
-    n_soil = len(on_soil.targets)
-    slot = np.full(n_rows, -1, dtype=np.int32)
-    slot[on_soil.targets] = np.arange(n_soil, dtype=np.int32)
-    ran = np.zeros(n_rows, dtype=bool)
-    ran[on_water.targets] = True
-    rest = ~ran[on_soil.index]
-    below = np.concatenate(([0], np.cumsum(rest)))
-    rest_start = below[on_soil.start] - below[on_soil.start[0]]
-    n_water = len(on_water.targets)
-    cuts = np.searchsorted(on_water.start, np.arange(1, chunks) * (on_water.start[-1] / chunks))
-    bounds = np.concatenate(([0], np.minimum(cuts, n_water), [n_water])).astype(np.int64)
-    reach = slot[on_water.index]
-    lo, hi = np.zeros(chunks, dtype=np.int64), np.zeros(chunks, dtype=np.int64)
-    for c in range(chunks):
-        mine = reach[on_water.start[bounds[c]] : on_water.start[bounds[c + 1]]]
-        mine = mine[mine >= 0]
-        if len(mine):
-            lo[c], hi[c] = mine.min(), mine.max() + 1
-    sums = np.zeros((chunks, n_soil, 1 + 2 * dim))
-    return SoilSide(
-        (on_water, on_soil), slot, bounds, lo, hi, sums, rest_start.astype(np.int64), on_soil.index[rest]
-    )
-
-
 @kernel(parallel=True)
 def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore, is3d=None):
     """p~_b = sum_a V_a p_a W_ab / sum_a V_a W_ab over the water neighbours a of soil b (Shepard
@@ -306,8 +256,8 @@ def pair_correction(m0, m1, m2, m3, m4, m5, den, kappa, is3d):
 
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, slot, chunks, lo, hi, sums, drho=None, p=None, pore=None, is3d=None, wall=None,
-                     one_soil=None, linear=None, corr=None, kappa=0.0):  # fmt: skip
+                     acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
+                     linear=None, corr=None, kappa=0.0):  # fmt: skip
     """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
     F = W'(r) / r):
       * with p and pore (mixture): p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab (Shepard, the soil's
@@ -341,43 +291,9 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
     Returns the largest lambda_a = sum_b K_ab / m_a. wall: the fixed flags (None without fixed
     blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
     and nothing else. one_soil: the material id when the scene has one soil material (then the
-    per-material constants are loop invariants), else None.
-    The soil side of every pair with an owned soil particle (slot[b] >= 0, its soil target index) is
-    summed here too, once p^_a and L_a are known, in a second loop over the row's soil neighbours
-    that reuses W and W'/r of the first (a row's pairs, cached in `cache`): sums[c, slot[b]] gets
-    sum_a V_a W_ab, sum_a V_a W_ab u and (mixture) sum_a V_a F (p^_a - p~_b) L_a d, what
-    seepage_on_soil adds its ghost and image pairs to. The rows run in the chunks of `chunks`
-    (soil_side), each with its own sums (no two threads add to one soil particle): chunk c zeroes
-    sums[c, lo[c]:hi[c]], the soil it reaches."""
-    three = is3d is not None
-    gs = 4 if three else 3  # column of sums where the buoyancy's sums start (after den and the drag's)
-    n_chunks = chunks.shape[0] - 1
-    worst_of = np.zeros(max(n_chunks, 1))
-    for c in prange(n_chunks):
-        worst_of[c] = _water_rows(
-            c, chunks, lo, hi, targets, start, index, x, v, rho, mass, material, drag, solid, grain_density,
-            h, norm, acc, slot, sums, drho, p, pore, is3d, wall, one_soil, linear, corr, kappa, gs,
-        )  # fmt: skip
+    per-material constants are loop invariants), else None."""
     worst = 0.0
-    for c in range(n_chunks):
-        worst = max(worst, worst_of[c])
-    return worst
-
-
-@kernel
-def _water_rows(c, chunks, lo, hi, targets, start, index, x, v, rho, mass, material, drag, solid,
-                grain_density, h, norm, acc, slot, sums, drho, p, pore, is3d, wall, one_soil, linear, corr,
-                kappa, gs):  # fmt: skip
-    """seepage_on_water's rows of chunk c (serial), their pairs' soil side into sums[c]."""
-    for tb in range(lo[c], hi[c]):
-        for k in range(sums.shape[2]):
-            sums[c, tb, k] = 0.0
-    longest = 0
-    for t in range(chunks[c], chunks[c + 1]):
-        longest = max(longest, start[t + 1] - start[t])
-    cache = np.empty((longest, 2))  # W and W'/r of the row's pairs, for the soil side
-    worst = 0.0
-    for t in range(chunks[c], chunks[c + 1]):
+    for t in prange(targets.shape[0]):
         a = targets[t]
         xa0, xa1 = x[a, 0], x[a, 1]
         va0, va1 = v[a, 0], v[a, 1]
@@ -408,11 +324,7 @@ def _water_rows(c, chunks, lo, hi, targets, start, index, x, v, rho, mass, mater
             vol_b = mass[b] / rho[b]
             w = cubic_spline_w(r, h, norm)
             vw = vol_b * w
-            fr = cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
-            vf = vol_b * fr
-            cache[s - first, 0] = w
-            if pore is not None:
-                cache[s - first, 1] = fr
+            vf = vol_b * cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
             kw = vw * drag[mb]  # K_ab / V_a
             f0 += kw * u0
             f1 += kw * u1
@@ -503,62 +415,12 @@ def _water_rows(c, chunks, lo, hi, targets, start, index, x, v, rho, mass, mater
             div -= (s0 * b0 + s1 * b1 + s2 * b2) / den
             phi = min(phi, 0.95)  # a water particle is never entirely inside grains
             drho[a] += -rho[a] * phi / (1.0 - phi) * div
-        # the soil side of the row's pairs (seepage_on_soil's pair terms, owned soil only)
-        l0, l1, l2, l3, l4, l5 = (1.0, 1.0, 1.0, 0.0, 0.0, 0.0)
-        if corr is not None:
-            l0, l1, l2, l3, l4, l5 = corr[a, 0], corr[a, 1], corr[a, 2], corr[a, 3], corr[a, 4], corr[a, 5]
-        for s in range(first, last):
-            b = index[s]
-            tb = slot[b]
-            if tb < 0:
-                continue
-            vw = vol_a * cache[s - first, 0]
-            sums[c, tb, 0] += vw
-            sums[c, tb, 1] += vw * (va0 - v[b, 0])
-            sums[c, tb, 2] += vw * (va1 - v[b, 1])
-            if is3d is not None:
-                sums[c, tb, 3] += vw * (va2 - v[b, 2])
-            if pore is not None:
-                d0 = x[b, 0] - xa0
-                d1 = x[b, 1] - xa1
-                d2 = x[b, 2] - xa2 if is3d is not None else 0.0
-                vfp = vol_a * cache[s - first, 1] * (pore[a] - pore[b])
-                if corr is None:
-                    sums[c, tb, gs] += vfp * d0
-                    sums[c, tb, gs + 1] += vfp * d1
-                    if is3d is not None:
-                        sums[c, tb, gs + 2] += vfp * d2
-                else:
-                    sums[c, tb, gs] += vfp * (l0 * d0 + l3 * d1 + l5 * d2)
-                    sums[c, tb, gs + 1] += vfp * (l3 * d0 + l1 * d1 + l4 * d2)
-                    if is3d is not None:
-                        sums[c, tb, gs + 2] += vfp * (l5 * d0 + l4 * d1 + l2 * d2)
     return worst
 
 
-@kernel
-def _chunk_sums(t, lo, hi, sums, three, buoyancy):
-    """The water side's soil sums of soil target t: those of the chunks that reach it, in chunk order."""
-    gs = 4 if three else 3
-    den = w0 = w1 = w2 = g0 = g1 = g2 = 0.0
-    for c in range(lo.shape[0]):
-        if lo[c] <= t and t < hi[c]:
-            den += sums[c, t, 0]
-            w0 += sums[c, t, 1]
-            w1 += sums[c, t, 2]
-            if three:
-                w2 += sums[c, t, 3]
-            if buoyancy:
-                g0 += sums[c, t, gs]
-                g1 += sums[c, t, gs + 1]
-                if three:
-                    g2 += sums[c, t, gs + 2]
-    return den, w0, w1, w2, g0, g1, g2
-
-
 @kernel(parallel=True)
-def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, lo, hi, sums,
-                    pore=None, is3d=None, wall=None, corr=None):  # fmt: skip
+def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, pore=None,
+                    is3d=None, wall=None, corr=None):  # fmt: skip
     """Soil rows b, one loop over their water neighbours a: add sum_a F_ab / m_b (the pair force of
     the module docstring) with pore holding p^ on the water rows (seepage_on_water) and p~ on the
     soil rows (pore_pressure_at_soil); None in the seed formulation (no buoyancy):
@@ -567,11 +429,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
     and opposite to round-off. Returns the largest relaxation rate lambda_b = sum_a K_ab / m_b.
     wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are
     walls, not pore water, and take no part in the coupling. corr: the water side's L_a (corrected
-    mixture; None otherwise): the buoyancy's d becomes L_a d, as on the water side.
-    The pairs with water that the water side ran (its targets) are summed there, into sums (the
-    chunks c with lo[c] <= t < hi[c], in chunk order); start and index hold the rest of the soil
-    rows' water neighbours (ghosts, images: soil_side), summed here."""
-    three = is3d is not None
+    mixture; None otherwise): the buoyancy's d becomes L_a d, as on the water side."""
     worst = 0.0
     for t in prange(targets.shape[0]):
         b = targets[t]
@@ -580,7 +438,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
         xb2 = x[b, 2] if is3d is not None else 0.0
         vb2 = v[b, 2] if is3d is not None else 0.0
         p_b = pore[b] if pore is not None else 0.0
-        den, w0, w1, w2, g0, g1, g2 = _chunk_sums(t, lo, hi, sums, three, pore is not None)
+        den = w0 = w1 = w2 = g0 = g1 = g2 = 0.0
         for s in range(start[t], start[t + 1]):
             a = index[s]
             if wall is not None and wall[a]:
@@ -728,15 +586,9 @@ class SeepageOnWater(_Coupling):
     def run(self, ctx):
         ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
         mix = st.mixture
-        split = ctx.shared.get("seepage soil side")
-        on_soil = ctx.lists[(Phase.SOIL, Phase.WATER)]
-        if split is None or split.lists[0] is not nl or split.lists[1] is not on_soil:  # a rebuild
-            split = soil_side(nl, on_soil, len(ps["x"]), ps["x"].shape[1])
-            ctx.shared["seepage soil side"] = split
         ctx.shared["seepage water rate"] = seepage_on_water(
             nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
-            st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], split.slot, split.chunks, split.lo,
-            split.hi, split.sums, ps["drho"] if mix else None,
+            st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
             ps["fixed"] if st.walls else None, st.one_soil, True if st.linear and mix else None,
             ps["pair_correction"] if st.corrected else None, st.kappa,
@@ -770,10 +622,8 @@ class SeepageOnSoil(_Coupling):
 
     def run(self, ctx):
         ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
-        split = ctx.shared["seepage soil side"]  # the water side ran first, for these lists
         self.lam = seepage_on_soil(
-            nl.targets, split.rest_start, split.rest_index, ps["x"], ps["v"], ps["rho"], ps["mass"],
-            ps["material"], st.drag, st.solid, ctx.h, ctx.norm, ps["acc"], split.lo, split.hi, split.sums,
-            ps["pore_pressure"] if st.mixture else None, ctx.is3d,
+            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if st.mixture else None, ctx.is3d,
             ps["fixed"] if st.walls else None, ps["pair_correction"] if st.corrected else None,
         )  # fmt: skip
