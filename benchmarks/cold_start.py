@@ -33,24 +33,44 @@ sim = dam_break({n})
 for _ in range(20):
     sim.step()
 grown = resident() - before
-wall = spin_after(t0, c0)
+if {cpu_spin!r}:  # the slowdown by CPU time alone: wall time runs on while a process shares its core
+    spin_after(time.perf_counter() - (time.process_time() - c0), c0)
+wall = spin_after(t0, c0, 0.0) if {cpu_spin!r} else spin_after(t0, c0)
 print(wall, time.process_time() - c0, grown, sim.particles.n_owned)
 """
+
+
+def start(n, cache_dir, root=ROOT, cpu=None, env=None, cpu_spin=False):
+    """Start the fresh process (see fresh_process); `cpu_spin`: the controlled slowdown adds its
+    fraction of CPU time only, for a process that shares its core with another (its wall time is
+    then not its own)."""
+    env = {
+        **(os.environ if env is None else env),
+        "NUMBA_CACHE_DIR": str(cache_dir),
+        "NUMBA_NUM_THREADS": "1",
+    }
+    script = COLD.format(
+        root=str(root), bench=str(Path(root) / "benchmarks"), n=n, cpu=cpu, cpu_spin=cpu_spin
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    proc.root = root
+    return proc
+
+
+def result(proc):
+    """((wall s, CPU s), resident-set growth, particle count) of a started process, when it ends."""
+    out, err = proc.communicate()
+    if proc.returncode:
+        last = err.strip().splitlines()[-1:]
+        raise RuntimeError(f"cold start in {proc.root} failed: {last[0] if last else 'no message'}")
+    wall, cpu_s, rss, particles = out.split()
+    return (float(wall), float(cpu_s)), int(rss), int(particles)
 
 
 def fresh_process(n, cache_dir, root=ROOT, cpu=None, env=None):
     """(wall s, CPU s) for import, set-up, compile or cache load and 20 steps of n particles in a
     fresh process; its resident-set growth; the particle count. `env` replaces the inherited
     environment (NUMBA_CACHE_DIR and NUMBA_NUM_THREADS are set here)."""
-    env = {
-        **(os.environ if env is None else env),
-        "NUMBA_CACHE_DIR": str(cache_dir),
-        "NUMBA_NUM_THREADS": "1",
-    }
-    script = COLD.format(root=str(root), bench=str(Path(root) / "benchmarks"), n=n, cpu=cpu)
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env)
-    if out.returncode:
-        last = out.stderr.strip().splitlines()[-1:]
-        raise RuntimeError(f"cold start in {root} failed: {last[0] if last else 'no message'}")
-    wall, cpu_s, rss, particles = out.stdout.split()
-    return (float(wall), float(cpu_s)), int(rss), int(particles)
+    return result(start(n, cache_dir, root, cpu, env))

@@ -1,18 +1,21 @@
 """The cold compile timed against the baseline commit's build, side by side (the gate's verdict for
 `cold_compile`; docs/benchmarks.md).
 
-A cold compile gives one sample per process (about 20 s of CPU, almost all of it Numba compiling the
-dam break's kernels), so it cannot take turns call by call like the step benchmarks
-(reference_build.py). Instead a pair is four fresh processes on one core, one after the other:
-the baseline build cold (empty Numba cache of its own) and warm (the same cache, filled), the
-current build cold and warm, the order of the two builds alternating from pair to pair. A pair's
-figure is (cold - warm) current / (cold - warm) baseline by CPU time, and a measurement is the
-median over PAIRS pairs. Both builds of a pair run on the same core within about a minute: this
-host's two vCPUs differ in speed, and which one is slow changes from minute to minute. When more
-than one core is free the pairs are spread over STREAMS cores, one stream of pairs per core, each
-pair still on one core; that halves the gate's cost and leaves each ratio a same-core one.
+A cold compile gives one sample per process (about 15-20 s of CPU, almost all of it Numba
+compiling the dam break's kernels), so it cannot take turns call by call like the step benchmarks
+(reference_build.py). Processes taking turns, one build's cold start after the other's on the same
+core, were measured first: pair ratios 0.77 and 1.25 in one measurement, because a process lasts
+long enough for the core's speed to change under it (this host's two vCPUs change speed from
+minute to minute). So a pair runs the two builds' cold starts **at the same time, pinned to the
+same core**: the scheduler interleaves them every few milliseconds, both see the core in the same
+states, and each process's CPU time counts its own work. Then both warm starts (the same Numba
+caches, filled), the same way. A pair's figure is (cold - warm) current / (cold - warm) baseline by
+CPU time; a measurement is the median over PAIRS pairs. Each process has its own empty Numba cache
+directory. The pairs are spread over STREAMS cores, one pair per core at a time (each pair's two
+builds on one core), which halves the gate's cost. `mode="turns"` keeps the one-after-the-other
+scheme for comparison.
 
-    python benchmarks/reference_compile.py [--pairs 6] [--slowdown 0.1]
+    python benchmarks/reference_build.py cold_compile [--pairs 6] [--slowdown 0.1]
 """
 
 from __future__ import annotations
@@ -25,12 +28,12 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from cold_start import fresh_process
+from cold_start import result, start
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-PAIRS = 6  # chosen from the measured spread (docs/benchmarks.md)
-STREAMS = 2  # cores used at once, one stream of pairs each
+PAIRS = 4  # chosen from the measured spread (docs/benchmarks.md)
+STREAMS = 2  # cores used at once, one pair each
 N_PARTICLES = 2_000  # as bench_gate.py's cold_compile
 
 
@@ -42,24 +45,31 @@ def _env(slowdown):
     return env
 
 
-def compile_cpu(root, cpu, slowdown=None):
-    """CPU s of a cold start minus a warm start of `root`'s build on core `cpu` (a fresh empty Numba
-    cache, filled by the cold start and read by the warm one)."""
-    with tempfile.TemporaryDirectory(prefix="numba-cold-") as cache:
-        (_, cold), _, _ = fresh_process(N_PARTICLES, cache, root=root, cpu=cpu, env=_env(slowdown))
-        (_, warm), _, _ = fresh_process(N_PARTICLES, cache, root=root, cpu=cpu, env=_env(slowdown))
-    return cold - warm
+def _cpu(procs):
+    return [result(p)[0][1] for p in procs]
 
 
-def pair(reference, current, cpu, baseline_first, slowdown=None):
-    """(baseline s, current s) of one pair on one core, in the given order."""
-    if baseline_first:
-        r = compile_cpu(reference, cpu)
-        n = compile_cpu(current, cpu, slowdown)
-    else:
-        n = compile_cpu(current, cpu, slowdown)
-        r = compile_cpu(reference, cpu)
-    return r, n
+def pair(reference, current, cpu, baseline_first=True, slowdown=None, mode="together"):
+    """(baseline s, current s): cold minus warm start CPU time of each build on core `cpu`, the
+    two builds at the same time (`together`) or one after the other (`turns`, baseline first or
+    not). Each build has its own Numba cache, empty for the cold start, filled for the warm one."""
+    with (
+        tempfile.TemporaryDirectory(prefix="numba-cold-") as ref_cache,
+        tempfile.TemporaryDirectory(prefix="numba-cold-") as new_cache,
+    ):
+        sides = [(0, reference, ref_cache, None), (1, current, new_cache, slowdown)]
+        if not baseline_first:
+            sides.reverse()
+        times = {}
+        for phase in ("cold", "warm"):
+            if mode == "together":
+                procs = [start(N_PARTICLES, c, r, cpu, _env(s), cpu_spin=True) for _, r, c, s in sides]
+                for (i, _, _, _), t in zip(sides, _cpu(procs)):
+                    times[phase, i] = t
+            else:
+                for i, r, c, s in sides:
+                    times[phase, i] = _cpu([start(N_PARTICLES, c, r, cpu, _env(s))])[0]
+    return tuple(times["cold", i] - times["warm", i] for i in (0, 1))
 
 
 def cores(streams=STREAMS):
@@ -82,21 +92,21 @@ def byte_compile(*trees):
         )
 
 
-def pairs_times(reference, current=ROOT, slowdown=None, pairs=PAIRS, streams=STREAMS):
+def pairs_times(reference, current=ROOT, slowdown=None, pairs=PAIRS, streams=STREAMS, mode="together"):
     """[(baseline s, current s)] of `pairs` pairs, spread over the first `streams` cores."""
     byte_compile(reference, current)
     use = cores(streams)
 
     def stream(j):  # the pairs of core use[j], the order of the builds alternating (and per core)
         count = len(range(j, pairs, len(use)))
-        return [pair(reference, current, use[j], (k + j) % 2 == 0, slowdown) for k in range(count)]
+        return [pair(reference, current, use[j], (k + j) % 2 == 0, slowdown, mode) for k in range(count)]
 
     with ThreadPoolExecutor(len(use)) as pool:
         return [t for times in pool.map(stream, range(len(use))) for t in times]
 
 
-def measurement(reference, current=ROOT, slowdown=None, pairs=PAIRS, streams=STREAMS):
+def measurement(reference, current=ROOT, slowdown=None, pairs=PAIRS, streams=STREAMS, mode="together"):
     """`ratio`: the median over the pairs of current / baseline compile time (CPU s)."""
-    times = pairs_times(reference, current, slowdown, pairs, streams)
+    times = pairs_times(reference, current, slowdown, pairs, streams, mode)
     per_pair = [n / r for r, n in times]
     return {"ratio": statistics.median(per_pair), "pair_ratios": per_pair, "times": times}
