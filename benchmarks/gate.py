@@ -12,10 +12,11 @@ the other, and keeps each benchmark's lowest ratio (its time / the calibration k
 interleaved in the same run; see bench_gate.py and calibration.py). A benchmark regressed when
 that ratio is more than `threshold` (relative) above the baseline's median ratio, and stays so
 in RETRIES re-measurements of it alone (one process each; it keeps its lowest ratio).
-The step benchmarks (water, soil, two-phase, rebuild) are then timed against the baseline
-commit's own build, alternating processes (reference_build.py), and that comparison decides their
-verdict: the host's slow phases move the calibration ratio by 15-25 % for minutes, but slow both
-builds alike.
+The step benchmarks (water, soil, two-phase, rebuild), the 2-rank MPI step and the cold compile
+are then timed against the baseline commit's own build, the two builds taking turns on the same
+cores (reference_build.py, reference_mpi.py, reference_compile.py), and that comparison decides
+their verdict: the host's slow phases move the calibration ratio by 15-25 % for minutes, but slow
+both builds alike.
 
 The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
 suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their median and
@@ -519,7 +520,8 @@ def cmd_reference_baseline(args):
             runs.setdefault(name, []).append({**m, "load_1min": load})
             pairs = ", ".join(f"{r:.3f}" for r in m["pair_ratios"])
             print(
-                f"run {k + 1}/{args.runs}: {name} A/A {m['ratio']:.4f} (pair ratios {pairs}), load {load:.2f}"
+                f"run {k + 1}/{args.runs}: {name} A/A {m['ratio']:.4f} (pairs {pairs}), load {load:.2f}",
+                flush=True,
             )
     out = dict(previous.get("benchmarks", {}))
     for name, ms in runs.items():

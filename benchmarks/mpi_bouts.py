@@ -5,14 +5,14 @@
 ROOT is the tree whose `solver` and benchmark set-up this job imports (the current tree or an
 exported baseline commit). Rank r pins itself to the r-th core of --cores, sets up the dam break
 (as mpi_step.py), warms up, connects to the parent's Unix socket and says `ready`. Then for each
-`go K` line it reads: a barrier, K steps, the controlled slowdown (slowdown.py) if set, a
-barrier, and it answers `wall cpu comm core`: the bout's wall time between the barriers, its own
-CPU time, the part of it spent in communication and the core it last ran on (/proc/self/stat),
-which the parent checks against the pin.
-Between bouts every rank waits in a blocking socket read, which sleeps: MPICH's own waits
-busy-poll, and a job spinning in a barrier would take the core from the other build's bout.
-On `stop` it answers with its CPU time since `ready` outside the bouts (the parent checks that
-the idle job used next to none) and exits.
+`go K` line it reads: a barrier, K steps, the controlled slowdown (slowdown.py) if set (that
+fraction of the rank's CPU time outside communication, spun), a barrier, and it answers
+`wall cpu comm core`: the bout's wall time between the barriers, its own CPU time, the part of
+it spent in communication and the core it last ran on (/proc/self/stat), which the parent checks
+against the pin. Between bouts every rank waits in a blocking socket read, which sleeps: MPICH's
+own waits busy-poll, and a job spinning in a barrier would take the core from the other build's
+bout. On `stop` it answers with its CPU time since `ready` outside the bouts (the parent checks
+that the idle job used next to none) and exits.
 """
 
 from __future__ import annotations
@@ -81,7 +81,10 @@ def main(argv=None):
         t0, c0, m0 = time.perf_counter(), time.process_time(), comm_cpu(comm)
         for _ in range(k):
             sim.step()
-        spin_after(t0, c0)
+        # the controlled slowdown, if set: the rank's computing (its CPU time outside communication)
+        # made that fraction longer, as a slower kernel would; the gate's figure is that time
+        compute = time.process_time() - c0 - (comm_cpu(comm) - m0)
+        spin_after(time.perf_counter() - compute, time.process_time() - compute)
         comm.barrier()
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         in_bouts += cpu
