@@ -329,10 +329,10 @@ def pairs_of(reference, name):
 
 
 def against_reference_build(s, reference, names, slowdown=None):
-    """The verdict of the step benchmarks: their time against the baseline commit's build, timed
-    side by side (reference_build.py). The calibration ratio stays in the row for the trend; its
-    own verdict is kept as `calibration_regressed`. If the baseline commit cannot be exported (a
-    shallow clone), the calibration verdict stands and the row says why."""
+    """The verdict of the step benchmarks, the MPI step and the cold compile: their time against the
+    baseline commit's build, timed side by side (reference_build.py). The calibration ratio stays in
+    the row for the trend; its own verdict is kept as `calibration_regressed`. If the baseline commit
+    cannot be exported (a shallow clone), the calibration verdict stands and the row says why."""
     try:
         tree = reference_build.reference_tree(reference["commit"])
     except RuntimeError as err:
@@ -605,7 +605,7 @@ def repeat_side_by_side(args, baseline):
     tree = reference_build.reference_tree(reference["commit"])
     per, flagged_runs = {}, 0
     for k in range(args.runs):
-        flagged = []
+        flagged, pair_ratios = [], {}
         for name, b in reference["benchmarks"].items():
             if args.k and args.k not in name:
                 continue
@@ -613,6 +613,7 @@ def repeat_side_by_side(args, baseline):
                 name, tree, slowdown=args.slowdown, pairs=pairs_of(reference, name)
             )
             change = m["ratio"] - 1
+            pair_ratios[name] = m["pair_ratios"]
             per.setdefault(name, []).append((change, change > b["threshold"]))
             if change > b["threshold"]:
                 flagged.append(name)
@@ -620,7 +621,12 @@ def repeat_side_by_side(args, baseline):
         print(
             f"run {k + 1}/{args.runs} side by side (slowdown {args.slowdown or 0:g}, load "
             f"{os.getloadavg()[0]:.2f}): "
-            + ", ".join(f"{n} {v[-1][0]:+.1%}{'!' if v[-1][1] else ''}" for n, v in per.items()),
+            + ", ".join(
+                f"{n} {v[-1][0]:+.1%}{'!' if v[-1][1] else ''} (pairs "
+                + ", ".join(f"{p:.3f}" for p in pair_ratios.get(n, []))
+                + ")"
+                for n, v in per.items()
+            ),
             flush=True,
         )
     print(f"{flagged_runs} of {args.runs} runs flagged a regression (slowdown {args.slowdown or 0:g})")

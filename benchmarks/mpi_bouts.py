@@ -46,7 +46,9 @@ def main(argv=None):
     ap.add_argument("--cores", required=True, help="comma-separated core per rank")
     ap.add_argument("--particles", type=int, default=10_000)
     args = ap.parse_args(argv)
-    sys.path[:0] = [str(args.root), str(args.root / "benchmarks")]
+    # ROOT's modules only: this script's own directory (sys.path[0], the current tree's benchmarks/)
+    # would otherwise supply whatever ROOT lacks
+    sys.path[0:1] = [str(args.root), str(args.root / "benchmarks")]
     import numba
 
     numba.set_num_threads(1)

@@ -200,12 +200,8 @@ def test_reference_baseline_of_one_benchmark_keeps_the_others(monkeypatch, tmp_p
             "by_estimator": {"wall": 1.0},
         },
     )
-    assert (
-        gate.main(
-            ["reference-baseline", "--baseline", str(path), "-k", "mpi_two", "--runs", "5", "--commit", "HEAD"]
-        )
-        == 0
-    )
+    argv = ["reference-baseline", "--baseline", str(path), "-k", "mpi_two", "--runs", "5", "--commit", "HEAD"]
+    assert gate.main(argv) == 0
     ref = json.loads(path.read_text())["reference_build"]
     assert ref["benchmarks"]["water_step"] == {"threshold": 0.022}
     mpi = ref["benchmarks"]["mpi_two_rank_step"]
