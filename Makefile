@@ -45,7 +45,7 @@ bench-check: $(STAMP)
 	$(BIN)/python benchmarks/gate.py check --json $(NIGHTLY)/bench-latest.json
 
 ## make bench-baseline: re-measure the gate's baseline and thresholds (10 runs of the gate suite), then
-## the spread of the side-by-side timing against the new baseline commit's build (10 runs)
+## the spread of the side-by-side timing against the new baseline commit's build (10 runs; about an hour in all)
 bench-baseline: $(STAMP)
 	$(BIN)/python benchmarks/gate.py baseline --runs 10
 	$(BIN)/python benchmarks/gate.py reference-baseline --runs 10

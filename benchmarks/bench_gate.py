@@ -35,6 +35,7 @@ from pathlib import Path
 import numba
 import pytest
 from calibration import calibration
+from cold_start import fresh_process
 from dam_break_setup import dam_break
 from slowdown import ENV as SLOWDOWN_ENV
 from slowdown import spin_after
@@ -177,40 +178,6 @@ def test_mpi_two_rank_step(benchmark):
         res["calibration_cpu_s"],
         particles=res["particles"],
     )
-
-
-COLD = """
-import os, sys, time
-t0, c0 = time.perf_counter(), time.process_time()
-sys.path[:0] = [{root!r}, {bench!r}]
-from slowdown import spin_after
-import solver.simulation
-def resident():
-    return int(open("/proc/self/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-before = resident()
-from dam_break_setup import dam_break
-sim = dam_break({n})
-for _ in range(20):
-    sim.step()
-grown = resident() - before
-wall = spin_after(t0, c0)
-print(wall, time.process_time() - c0, grown, sim.particles.n_owned)
-"""
-
-
-def fresh_process(n, cache_dir):
-    """(wall s, CPU s) for import, set-up, compile or cache load and 20 steps of n particles in a
-    fresh process; its resident-set growth; the particle count."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "NUMBA_NUM_THREADS": "1"}
-    out = subprocess.run(
-        [sys.executable, "-c", COLD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"), n=n)],
-        capture_output=True,
-        text=True,
-        env=env,
-        check=True,
-    )
-    wall, cpu, rss, particles = out.stdout.split()
-    return (float(wall), float(cpu)), int(rss), int(particles)
 
 
 def test_cold_compile(benchmark):

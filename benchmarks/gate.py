@@ -4,7 +4,7 @@
     python benchmarks/gate.py baseline [--runs 10]                          write the baseline
     python benchmarks/gate.py repeat [--runs 10] [--slowdown 0.10]          the gate's own test
     python benchmarks/gate.py loo [--from-raw FILE]         each baseline run judged by the others
-    python benchmarks/gate.py reference-baseline [--runs 10]   spread of the side-by-side timing
+    python benchmarks/gate.py reference-baseline [--runs 10] [-k NAME] [--commit C]   side-by-side spread
     python benchmarks/gate.py repeat --side-by-side [--runs 10] [--slowdown 0.10]   its own test
 
 `check` runs benchmarks/bench_gate.py under pytest-benchmark in PROCESSES processes, one after
@@ -12,10 +12,11 @@ the other, and keeps each benchmark's lowest ratio (its time / the calibration k
 interleaved in the same run; see bench_gate.py and calibration.py). A benchmark regressed when
 that ratio is more than `threshold` (relative) above the baseline's median ratio, and stays so
 in RETRIES re-measurements of it alone (one process each; it keeps its lowest ratio).
-The step benchmarks (water, soil, two-phase, rebuild) are then timed against the baseline
-commit's own build, alternating processes (reference_build.py), and that comparison decides their
-verdict: the host's slow phases move the calibration ratio by 15-25 % for minutes, but slow both
-builds alike.
+The step benchmarks (water, soil, two-phase, rebuild), the 2-rank MPI step and the cold compile
+are then timed against the baseline commit's own build, the two builds taking turns on the same
+cores (reference_build.py, reference_mpi.py, reference_compile.py), and that comparison decides
+their verdict: the host's slow phases move the calibration ratio by 15-25 % for minutes, but slow
+both builds alike.
 
 The threshold comes from the measured run-to-run spread of the ratio: `baseline` runs the
 suite RUNS times on an unchanged build and stores, per benchmark, the ratios, their median and
@@ -322,11 +323,16 @@ def gated_run(baseline, baseline_path, slowdown=None, select=None, estimator=Non
     return s, run["output"]
 
 
+def pairs_of(reference, name):
+    """Process pairs per side-by-side measurement of a benchmark, as its thresholds were measured."""
+    return reference["benchmarks"][name].get("pairs", reference.get("pairs"))
+
+
 def against_reference_build(s, reference, names, slowdown=None):
-    """The verdict of the step benchmarks: their time against the baseline commit's build, timed
-    side by side (reference_build.py). The calibration ratio stays in the row for the trend; its
-    own verdict is kept as `calibration_regressed`. If the baseline commit cannot be exported (a
-    shallow clone), the calibration verdict stands and the row says why."""
+    """The verdict of the step benchmarks, the MPI step and the cold compile: their time against the
+    baseline commit's build, timed side by side (reference_build.py). The calibration ratio stays in
+    the row for the trend; its own verdict is kept as `calibration_regressed`. If the baseline commit
+    cannot be exported (a shallow clone), the calibration verdict stands and the row says why."""
     try:
         tree = reference_build.reference_tree(reference["commit"])
     except RuntimeError as err:
@@ -337,7 +343,9 @@ def against_reference_build(s, reference, names, slowdown=None):
     for r in s["benchmarks"]:
         if r["name"] not in names:
             continue
-        m = reference_build.measurement(r["name"], tree, slowdown=slowdown, pairs=reference["pairs"])
+        m = reference_build.measurement(
+            r["name"], tree, slowdown=slowdown, pairs=pairs_of(reference, r["name"])
+        )
         gate = reference["benchmarks"][r["name"]]["threshold"]
         r["calibration_regressed"] = r["regressed"]
         r["reference_build"] = {
@@ -488,39 +496,65 @@ def write_baseline(args, runs):
 
 def cmd_reference_baseline(args):
     """The run-to-run spread of the side-by-side measurement on an unchanged build: the baseline
-    commit's build against itself, RUNS times per step benchmark; threshold as for the ratios."""
+    commit's build against itself, RUNS times per benchmark; threshold as for the ratios. With -k
+    only the benchmarks whose name contains it are measured; the others keep their stored
+    thresholds. --commit moves the side-by-side baseline to another commit (the spread belongs to
+    the method and the host, so stored thresholds carry over)."""
     baseline = load_baseline(args.baseline)
     if baseline is None:
         print(f"no baseline at {args.baseline}: run `python benchmarks/gate.py baseline` first")
         return 2
-    tree = reference_build.reference_tree(baseline["commit"])
-    benches, loads = {}, []
+    previous = baseline.get("reference_build", {})
+    commit = args.commit or previous.get("commit") or baseline["commit"]
+    commit = (
+        subprocess.run(["git", "rev-parse", commit], capture_output=True, text=True, cwd=ROOT).stdout.strip()
+        or commit
+    )
+    tree = reference_build.reference_tree(commit)
+    names = [n for n in reference_build.SIDE_BY_SIDE if not args.k or args.k in n]
+    runs = {}
     for k in range(args.runs):
-        for name in reference_build.KINDS:
+        for name in names:
             m = reference_build.measurement(name, tree, current=tree)
-            benches.setdefault(name, []).append(m["ratio"])
+            load = os.getloadavg()[0]
+            runs.setdefault(name, []).append({**m, "load_1min": load})
             pairs = ", ".join(f"{r:.3f}" for r in m["pair_ratios"])
-            print(f"run {k + 1}/{args.runs}: {name} A/A {m['ratio']:.4f} (pair ratios {pairs})", flush=True)
-        loads.append(os.getloadavg()[0])
-    out = {}
-    for name, medians in benches.items():
+            print(
+                f"run {k + 1}/{args.runs}: {name} A/A {m['ratio']:.4f} (pairs {pairs}), load {load:.2f}",
+                flush=True,
+            )
+    out = dict(previous.get("benchmarks", {}))
+    for name, ms in runs.items():
+        medians = [m["ratio"] for m in ms]
         sp = spread(medians)
-        out[name] = {"ratios": medians, **sp, "threshold": threshold_of(sp)}
+        out[name] = {
+            "ratios": medians,
+            **sp,
+            "threshold": threshold_of(sp),
+            "pairs": reference_build.default_pairs(name),
+            "pair_ratios": [m["pair_ratios"] for m in ms],
+            "loads_1min": [m["load_1min"] for m in ms],
+            "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        }
+        if "by_estimator" in ms[0]:  # the MPI step's other estimators, for the record
+            out[name]["by_estimator"] = {e: [m["by_estimator"][e] for m in ms] for e in ms[0]["by_estimator"]}
         print(
             f"  {name:20s} MAD-std {sp['mad_rel']:.2%}, max deviation {sp['max_dev_rel']:.2%}, "
             f"threshold +{out[name]['threshold']:.1%}"
         )
     baseline["reference_build"] = {
-        "commit": baseline["commit"],
+        **previous,
+        "commit": commit,
         "pairs": reference_build.PAIRS,
         "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "loads_1min": loads,
-        "rule": "a measurement = current / baseline-commit build, each the fastest of "
-        f"{reference_build.PAIRS} processes (CPU time of the fastest call in a process); threshold = max("
-        f"{MULTIPLE:g} x MAD-based relative spread of the baseline build against itself, {FLOOR:g}, "
-        "its largest deviation)",
+        "rule": "a measurement = the median over process pairs (job pairs for the MPI step) of each "
+        "pair's median ratio current / baseline-commit build (the cold compile: one ratio per pair); "
+        f"threshold = max({MULTIPLE:g} x MAD-based relative spread of the baseline build against "
+        f"itself over the runs, {FLOOR:g}, its largest deviation)",
         "benchmarks": out,
     }
+    if "loads_1min" in previous and len(names) < len(reference_build.SIDE_BY_SIDE):
+        baseline["reference_build"]["loads_1min"] = previous["loads_1min"]  # of the step benchmarks
     Path(args.baseline).write_text(json.dumps(baseline, indent=1) + "\n")
     print(f"side-by-side thresholds written to {args.baseline}")
     return 0
@@ -571,12 +605,15 @@ def repeat_side_by_side(args, baseline):
     tree = reference_build.reference_tree(reference["commit"])
     per, flagged_runs = {}, 0
     for k in range(args.runs):
-        flagged = []
+        flagged, pair_ratios = [], {}
         for name, b in reference["benchmarks"].items():
             if args.k and args.k not in name:
                 continue
-            m = reference_build.measurement(name, tree, slowdown=args.slowdown, pairs=reference["pairs"])
+            m = reference_build.measurement(
+                name, tree, slowdown=args.slowdown, pairs=pairs_of(reference, name)
+            )
             change = m["ratio"] - 1
+            pair_ratios[name] = m["pair_ratios"]
             per.setdefault(name, []).append((change, change > b["threshold"]))
             if change > b["threshold"]:
                 flagged.append(name)
@@ -584,7 +621,12 @@ def repeat_side_by_side(args, baseline):
         print(
             f"run {k + 1}/{args.runs} side by side (slowdown {args.slowdown or 0:g}, load "
             f"{os.getloadavg()[0]:.2f}): "
-            + ", ".join(f"{n} {v[-1][0]:+.1%}{'!' if v[-1][1] else ''}" for n, v in per.items()),
+            + ", ".join(
+                f"{n} {v[-1][0]:+.1%}{'!' if v[-1][1] else ''} (pairs "
+                + ", ".join(f"{p:.3f}" for p in pair_ratios.get(n, []))
+                + ")"
+                for n, v in per.items()
+            ),
             flush=True,
         )
     print(f"{flagged_runs} of {args.runs} runs flagged a regression (slowdown {args.slowdown or 0:g})")
@@ -656,6 +698,8 @@ def main(argv=None):
         )
         if name == "reference-baseline":
             p.add_argument("--runs", type=int, default=10)
+            p.add_argument("-k", help="only the benchmarks whose name contains this (the others keep theirs)")
+            p.add_argument("--commit", help="the side-by-side baseline commit (default: the stored one)")
             continue
         if name == "loo":
             p.add_argument(

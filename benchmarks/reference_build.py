@@ -16,6 +16,7 @@ into runs/bench/reference/<commit>; each process imports its own `solver` and it
 set-up.
 
     python benchmarks/reference_build.py water_step [--pairs 3] [--slowdown 0.1]
+    python benchmarks/reference_build.py mpi_two_rank_step | cold_compile    (their own schemes)
 """
 
 from __future__ import annotations
@@ -30,10 +31,13 @@ import tarfile
 import tempfile
 from pathlib import Path
 
+import reference_compile
+import reference_mpi
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 TREES = ROOT / "runs" / "bench" / "reference"
-PAIRS = 3  # process pairs per measurement
+PAIRS = 3  # process pairs per measurement (the MPI step and the cold compile: their own modules)
 ROUNDS = 200  # alternating timed calls per pair; a call is 1-4 ms
 
 # gate benchmark -> the child's build of it (the same scenes and sizes as bench_gate.py)
@@ -43,6 +47,9 @@ KINDS = {
     "two_phase_step": "two_phase",
     "neighbour_rebuild": "rebuild",
 }
+# every gate benchmark with a side-by-side verdict: the four above, and the two that cannot take
+# turns call by call on one core, each with its own scheme (reference_mpi.py, reference_compile.py)
+SIDE_BY_SIDE = (*KINDS, "mpi_two_rank_step", "cold_compile")
 
 # One build's side, pinned to the given core: set up, warm up, then one timed call per line read
 # from stdin, its CPU time written back. The wait for the next line is outside the timing.
@@ -167,10 +174,23 @@ def alternating_times(name, reference, current=ROOT, slowdown=None, rounds=ROUND
             p.errors.close()
 
 
-def measurement(name, reference, current=ROOT, slowdown=None, pairs=PAIRS):
+def default_pairs(name):
+    """Process pairs (job pairs for the MPI step) of one measurement of a benchmark."""
+    return {"mpi_two_rank_step": reference_mpi.PAIRS, "cold_compile": reference_compile.PAIRS}.get(
+        name, PAIRS
+    )
+
+
+def measurement(name, reference, current=ROOT, slowdown=None, pairs=None):
     """One side-by-side measurement of a gate benchmark: per process pair the median over its
     rounds of current / reference, and `ratio`, the median over the pairs (a pair now and then
-    reads 5-10 % off for its whole life, so pairs are the independent draws, not rounds)."""
+    reads 5-10 % off for its whole life, so pairs are the independent draws, not rounds). The MPI
+    step and the cold compile have their own schemes with the same output."""
+    pairs = pairs or default_pairs(name)
+    if name == "mpi_two_rank_step":
+        return reference_mpi.measurement(reference, current, slowdown, pairs)
+    if name == "cold_compile":
+        return reference_compile.measurement(reference, current, slowdown, pairs)
     rounds = [alternating_times(name, reference, current, slowdown) for _ in range(pairs)]
     per_pair = [statistics.median(n / r for r, n in pair) for pair in rounds]
     return {"ratio": statistics.median(per_pair), "pair_ratios": per_pair}
@@ -178,9 +198,9 @@ def measurement(name, reference, current=ROOT, slowdown=None, pairs=PAIRS):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("name", choices=list(KINDS))
+    ap.add_argument("name", choices=list(SIDE_BY_SIDE))
     ap.add_argument("--commit", help="baseline commit (default: the one in baselines/gate.json)")
-    ap.add_argument("--pairs", type=int, default=PAIRS)
+    ap.add_argument("--pairs", type=int, help="process pairs (default: the benchmark's own)")
     ap.add_argument("--slowdown", type=float)
     args = ap.parse_args(argv)
     if args.commit is None:
