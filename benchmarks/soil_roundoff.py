@@ -114,7 +114,8 @@ def main(argv=None):
         old, up, down, new = go(args.old, "0"), go(args.old, "+"), go(args.old, "-"), go(args.new, "0")
     if len(new["x"]) != len(old["x"]):
         raise SystemExit(f"different particle counts: old {len(old['x'])}, new {len(new['x'])}")
-    print(f"{args.case}: {len(old['x'])} particles, old {int(old['steps'])} steps, new {int(new['steps'])} steps")
+    steps = f"old {int(old['steps'])} steps, new {int(new['steps'])} steps"
+    print(f"{args.case}: {len(old['x'])} particles, {steps}")
     d_up, d_down, d_new = differences(old, up), differences(old, down), differences(old, new)
     within = True
     for key in d_new:
@@ -126,7 +127,8 @@ def main(argv=None):
             f"   ratio {d_new[key] / bound if bound > 0 else float('inf'):.2f}  {'ok' if ok else 'OUTSIDE'}"
         )
     print(f"  max |dx| / dx: new-old {d_new['x (m)'] / float(old['dx']):.3e}")
-    print(f"verdict: {'within' if within else 'NOT within'} round-off (new-old <= {args.factor:g} x the 1-ulp bound)")
+    verdict = "within" if within else "NOT within"
+    print(f"verdict: {verdict} round-off (new-old <= {args.factor:g} x the 1-ulp bound)")
     return 0 if within else 1
 
 
