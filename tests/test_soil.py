@@ -148,10 +148,11 @@ def test_jaumann_update_is_objective_under_rigid_rotation():
 
 
 def run_soil_rates(targets, start, index, x, v, rho, p, s, mass, *rest):
-    """The two kernels of the SoilRates term: the per-row table, then the pair pass."""
+    """The two kernels of the SoilRates term: the per-row table, then the pair pass, with the
+    lists' unsigned views as the term passes them (NeighbourList.unsigned)."""
     pair = np.empty((len(x), PAIR_COLUMNS))
     soil_pair_terms(len(x), rho, p, s, mass, pair)
-    soil_rates(targets, start, index, x, v, rho, s, pair, *rest)
+    soil_rates(targets, start.view(np.uint64), index.view(np.uint32), x, v, rho, s, pair, *rest)
 
 
 def test_soil_pair_terms_match_twin(rng):
@@ -190,7 +191,8 @@ def _lists(x, h):
     ],
 )
 def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
-    """mixed=False: the one-soil-material path (AV constants of the target for every pair)."""
+    """mixed False (None to the kernel): the one-soil-material path (AV constants of the target for
+    every pair)."""
     dx, h = 0.01, 0.013
     x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
     n = len(x)
@@ -234,7 +236,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
         av,
         av,
         True if dim == 3 else None,
-        mixed,
+        True if mixed else None,
     )
     if with_art:  # the artificial stress force is a pass (term) of its own
         flags = np.zeros(n, np.uint8)

@@ -206,7 +206,7 @@ class Constitution:
         """p from rho (eq. 17) and the return mapping of `stress`, in place."""
         ps = ctx.particles
         soil_stress_state(
-            ctx.rows[Phase.SOIL],
+            ctx.rows[Phase.SOIL].view(np.uint64),  # unsigned: no negative-index wrap-around (6 % of the pass)
             ps[rho],
             ps[stress],
             ps["material"],
