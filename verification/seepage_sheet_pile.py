@@ -61,7 +61,8 @@ skeleton is fixed; the seed form has no buoyancy pair).
 
 Start: the pore water at the reference head, p = gamma_w (h_ref(x, y) - y), rho = rho_w(p),
 m = rho dx^2; the ponds hydrostatic. This starts the run near the steady state; what remains is
-SPH's own approach to its steady state (a slow drift of Q, see docs/seepage.md).
+SPH's own approach to its steady state (with the corrected force Q/(k dH) is within 0.4 % of its final
+value from 0.1 s at 10 mm; docs/seepage.md, case 5).
 
 Observables (averaged over the last half of the run):
   * Q = n <v_x> (T - S) of the pore water under the pile (|x - XP| < W/2, y < T - S);
@@ -111,19 +112,15 @@ OUT = RESULTS / "seepage_sheet_pile"
 #    layer (the error analysis of seepage_bed_at_rest.py: h/D on its profiles): 0.065 at 10 mm.
 Q_TOLERANCE = 0.02
 Q_SOURCE = "issue 10's 2 % for a steady Darcy discharge, plus the reference's GCI"
-# The CI sample (10 mm, 0.3 s, means over 0.15-0.3 s): the 10 mm discretisation error measured with
-# the pore water held on the lattice (Q/(k dH) 0.4227, +4.9 %, results/.../held_pore_water.md: the
-# error without the disorder) plus what the disorder moves Q by over that run at 10 mm (0.4195 at
-# 0.05 s to 0.4156 at 0.3 s: 1.0 %); the reference's GCI is added in the test.
-CI_Q_TOLERANCE = (0.4227 - 0.40303) / 0.40303 + (0.4195 - 0.4156) / 0.40303
+# The CI sample (tests/test_seepage_sheet_pile.py: 10 mm, 0.3 s, means over 0.15-0.3 s) is held to the
+# same Q_TOLERANCE: with the corrected pore-pressure force Q is steady from 0.1 s (docs/seepage.md, case 5).
 # Documented shortfalls at the default resolution (docs/seepage.md): shown as known by the nightly.
 KNOWN_FAILURES = {
-    "seed: line x = w/2 + T/10, max normalised head error": "0.076 at 10 mm against h/T = 0.065 "
-    "(the row-to-row alternation of the pore pressure next to the pile; 0.033 at 5 mm). Also open, "
-    "though it passes at 10 mm over 0.5-1 s (-1.9 %): Q/(k dH) falls steadily, 3 % of the reference "
-    "per 0.5 s at 5 mm, to 0.380 at 3 s at 10 mm, because the Lagrangian pore water loses its lattice "
-    "order near the pile tip (with it held on the lattice Q is steady, +4.9 % / +3.8 % at 10 / 5 mm; "
-    "docs/seepage.md, case 5)",
+    "seed: line x = w/2 + T/10, max normalised head error": "0.085 at 10 mm against h/T = 0.065 "
+    "(corrected pore-pressure force, skeleton in the pile; 0.076 before both), growing over the run "
+    "(0.046 at 0.05 s, 0.089 at 1 s) while Q is steady: a slow drift of the pore pressure beside the "
+    "pile, not examined (docs/seepage.md, case 5). 5 mm not yet rerun with these changes (0.033 "
+    "before them).",
 }
 NIGHTLY_NOTE = "10 mm (default) and the 10/5 mm resolution study, 1 s each (5 mm: ~230 s CPU)"
 REFERENCE = reference_case_dir("openfoam_seepage_2d") / "data" / "pile_w40mm"
@@ -311,9 +308,9 @@ class PileWallPressure:
 
 class HeldPoreWater:
     """Diagnostic (not the solver's physics): the pore water put back at its start positions after
-    every step, so it keeps the skeleton's lattice (an Eulerian pore water). The Lagrangian pore
-    water moves relative to the fixed skeleton by k i t / n (about 0.5 dx per second next to the
-    pile tip); with it held, Q/(k dH) stops falling (docs/seepage.md, case 5)."""
+    every step, so it keeps the skeleton's lattice (an Eulerian pore water). With the symmetric
+    pressure force the Lagrangian pore water's small distortions made Q/(k dH) fall; held, it stopped
+    falling, which located the drift (docs/seepage.md, case 5)."""
 
     def __init__(self, sim):
         ps = sim.particles
@@ -338,7 +335,8 @@ class HydrostaticPorePass:
     (kappa gamma_w / rho, upward): the hydrostatic part no longer multiplies the zeroth-order term
     sum_b V_b grad W that the pore water's distortion makes nonzero. Not momentum-conserving (the
     neighbours get no reaction): a test of the mechanism, not a fix. Use as a context manager around
-    run_one (it patches FluidRates.run)."""
+    run_one(..., pressure_gradient="symmetric", pile_skeleton=False), the case as it was measured (it
+    patches FluidRates.run)."""
 
     Y0 = 0.5 * (H_UP + H_DOWN)  # the mean head: p - P_h is then at most gamma_w dH / 2 in the pores
 
