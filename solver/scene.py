@@ -318,6 +318,9 @@ class Numerics(Strict):
     # mixture: p^ at water, the buoyancy pair's water side (docs/seepage.md): "linear" is exact at a
     # bed's free surface under water, where "shepard" is off by O(h)
     pore_pressure_at_water: Literal["shepard", "linear"] = "shepard"
+    # pore water's own pressure gradient: "symmetric" (seed eq. 7) or "corrected" (the kernel-gradient-
+    # corrected difference form, exact for a linear pressure; solver/physics/pore_pressure_gradient.py)
+    pore_pressure_gradient: Literal["symmetric", "corrected"] = "symmetric"
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off

@@ -65,19 +65,24 @@ def sym_to_full(c, dim):
 
 
 def fluid_rates(
-    targets, x, v, rho, p, mass, c, h, dim, nbr_lists, tau=None, alpha=0.0, beta=0.0, xsph_eps=0.0
+    targets, x, v, rho, p, mass, c, h, dim, nbr_lists, tau=None, alpha=0.0, beta=0.0, xsph_eps=0.0, pore=None
 ):
-    """Seed eqs. (6), (7) with sigma = -p I + tau, (19) with beta phi^2, (22)."""
+    """Seed eqs. (6), (7) with sigma = -p I + tau, (19) with beta phi^2, (22). With pore, targets with
+    pore < 1 take the pressure part from corrected_pressure_gradient instead."""
     drho = np.zeros(len(x))
     acc = np.zeros((len(x), dim))
     xsph = np.zeros((len(x), dim))
     for t, i in enumerate(targets):
+        corrected = pore is not None and pore[i] < 1.0
+        if corrected:
+            acc[i] += corrected_pressure_acceleration(i, x, rho, p, mass, h, dim, nbr_lists[t])
         for j in nbr_lists[t]:
             gw = grad_w(x[i], x[j], h, dim)
             vij, xij = v[i] - v[j], x[i] - x[j]
             drho[i] += mass[j] * vij @ gw
-            sig_i = -p[i] * np.eye(dim) + (sym_to_full(tau[i], dim) if tau is not None else 0)
-            sig_j = -p[j] * np.eye(dim) + (sym_to_full(tau[j], dim) if tau is not None else 0)
+            p_i, p_j = (0.0, 0.0) if corrected else (p[i], p[j])  # the pressure part apart (above)
+            sig_i = -p_i * np.eye(dim) + (sym_to_full(tau[i], dim) if tau is not None else 0)
+            sig_j = -p_j * np.eye(dim) + (sym_to_full(tau[j], dim) if tau is not None else 0)
             acc[i] += mass[j] * (sig_i / rho[i] ** 2 + sig_j / rho[j] ** 2) @ gw
             vr = vij @ xij
             if vr < 0:
@@ -85,6 +90,29 @@ def fluid_rates(
                 acc[i] -= mass[j] * (-alpha * c * phi + beta * phi**2) / (0.5 * (rho[i] + rho[j])) * gw
             xsph[i] -= xsph_eps * mass[j] / rho[j] * vij * cubic_spline(np.linalg.norm(xij), h, dim)
     return drho, acc, xsph
+
+
+def corrected_pressure_acceleration(i, x, rho, p, mass, h, dim, nbrs):
+    """Pore water's pressure acceleration (solver/physics/pore_pressure_gradient.py): s a_c + (1 - s) a_sym,
+    a_c = -(1/rho_i) M^-1 sum_j V_j (p_j - p_i) grad_i W_ij, M = sum_j V_j grad_i W_ij (x) (x_j - x_i),
+    a_sym = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W_ij, s = 0 below CUT_SUPPORT[0] of
+    sum_j V_j W_ij, 1 above CUT_SUPPORT[1], linear between, 0 when det M <= 1/4."""
+    from solver.physics.pore_pressure_gradient import CUT_SUPPORT
+
+    grad, big_m, den = np.zeros(dim), np.zeros((dim, dim)), mass[i] / rho[i] * cubic_spline(0.0, h, dim)
+    a_sym = np.zeros(dim)
+    for j in nbrs:
+        gw = grad_w(x[i], x[j], h, dim)
+        vol = mass[j] / rho[j]
+        grad += vol * (p[j] - p[i]) * gw
+        big_m += vol * np.outer(gw, x[j] - x[i])
+        den += vol * cubic_spline(np.linalg.norm(x[i] - x[j]), h, dim)
+        a_sym -= mass[j] * (p[i] / rho[i] ** 2 + p[j] / rho[j] ** 2) * gw
+    det = np.linalg.det(big_m)
+    lo, hi = CUT_SUPPORT
+    s = float(np.clip((den - lo) / (hi - lo), 0.0, 1.0)) if det > 0.25 else 0.0
+    a_c = -np.linalg.solve(big_m, grad) / rho[i] if det > 0.0 else np.zeros(dim)
+    return s * a_c + (1.0 - s) * a_sym
 
 
 def continuity(targets, x, v, mass, h, dim, nbr_lists):

@@ -42,17 +42,48 @@ def test_seed_pore_water_is_labelled_and_left_out_of_the_density_diffusion():
     assert "pore_label" not in water_only.fields and _diffusion(water_only).fraction is None
 
 
+def test_the_case_runs_the_corrected_pore_pressure_and_a_skeleton_in_the_pile():
+    """The case's two choices (module docstring): the pore water's corrected pressure force
+    (numerics.pore_pressure_gradient, opt-in, off by default) and fixed soil in the pile below the
+    ground, at the pile's own particle sites, so the drag sum beside the pile has a full support."""
+    from solver.initial_state import create_particles
+
+    scene = sp.scene(20, 0.1)
+    assert scene.numerics.pore_pressure_gradient == "corrected"
+    plan = build_plan(scene)
+    fluid = next(t for t in plan.terms if t.name == "fluid rates")
+    assert fluid.pore == "pore_label" and "pore_label" in fluid.reads
+    assert any("M_i^-1" in e.what for e in fluid.equations)
+    ps = create_particles(scene, plan)
+    n = ps.n_owned
+    soil = plan.materials.names.index("sand")
+    x = ps["x"][:n][ps["material"][:n] == soil]
+    inside = (np.abs(x[:, 0] - sp.HALF) < 0.5 * sp.W) & (x[:, 1] > sp.T - sp.S)
+    assert inside.sum() == round(sp.W / 0.01) * round(sp.S / 0.01)  # the pile's 4 x 10 sites at 10 mm
+    assert scene_from_file("dam_break_2d.toml").numerics.pore_pressure_gradient == "symmetric"
+    default = build_plan(sp.scene(20, 0.1, pressure_gradient="symmetric"))
+    assert next(t for t in default.terms if t.name == "fluid rates").pore is None
+
+
+def test_a_bad_pore_pressure_gradient_is_refused_naming_the_key():
+    from solver.errors import SceneError
+
+    with pytest.raises(SceneError, match="numerics.pore_pressure_gradient"):
+        sp.scene(20, 0.1, pressure_gradient="cubic")
+
+
 @pytest.mark.slow
 def test_sheet_pile_ci_sample_against_openfoam():
-    """dx = 10 mm, 0.3 s (about 10 s of CPU after the compile): the discharge under the 40 mm pile
-    against OpenFOAM's, within the 10 mm discretisation error (measured with the pore water held on
-    the lattice) plus the disorder's drift over the run (CI_Q_TOLERANCE, 5.9 %; measured +3.0 %)
-    plus the reference's GCI; the head
-    along the base within h/T (support truncation, the case's error analysis); and the pile tight:
-    the head under its tip is the mean of the two pond heads (antisymmetry) within h/T of dH."""
+    """dx = 10 mm, 0.3 s (about 10 s of CPU after the compile; means over 0.15-0.3 s): the discharge
+    under the 40 mm pile against OpenFOAM's within the case's own tolerance (issue 10's 2 % plus the
+    reference's GCI; measured CI_Q_MEASURED), steady over the window; the head along the base within
+    h/T (support truncation, the case's error analysis); and the pile tight: the head under its tip is
+    the mean of the two pond heads (antisymmetry) within h/T of dH."""
     r = sp.run_one(20, 0.3, samples=7)
     q_ref, gci = sp.reference_discharge()
-    assert abs(r["Q_over_kdH"] / q_ref - 1.0) <= sp.CI_Q_TOLERANCE + gci, r["Q_over_kdH"]
+    checks = {c.metric: c for c in sp.checks(r)}
+    assert checks["seed: Q / (k dH) / reference - 1"].passed, r["Q_over_kdH"]
+    assert checks["seed: Q steady over the averaging window"].passed, r["Q_over_kdH_series"]
     assert r["base"] <= r["h"] / sp.T, r["base"]
     x, _, head = r["base_profile"]
     mid = np.interp(0.0, x, head)  # normalised head at the base under the pile

@@ -17,12 +17,14 @@ import numpy as np
 from numba import prange
 
 from ..config import kernel
-from ..fields import RHO_HALF
+from ..fields import PORE_LABEL, RHO_HALF
 from ..kernels import cubic_spline_dwdr, cubic_spline_w
 from ..materials import Phase
 from ..particles import FieldSpec
 from ..scene import Leapfrog
 from ..term import Equation, Integrated, Stage, Term
+from .density_diffusion import pore_field
+from .pore_pressure_gradient import corrected_weight, solve_m
 from .tait_eos import saturated_mixture
 from .viscous_stress import viscous_stress_on
 
@@ -37,6 +39,7 @@ def fluid_rates(
     is3d=None,                     # None in 2D: every z term is pruned at compile time
     mixed=None,                    # None when the phase has one material: no per-pair look-ups
     apparent=None,                 # not None: the density-jump forms (pore water, docs/seepage.md)
+    pore=None,                     # pore field (< 1: pore water): pressure by the corrected difference form
 ):  # fmt: skip
     """Continuity (6) and momentum (7) for each target; adds into drho and acc.
 
@@ -44,7 +47,12 @@ def fluid_rates(
     stay consistent across a jump of density at a continuous pressure (Colagrossi & Landrini 2003):
     drho_i = rho_i sum_j V_j v_ij . grad W and -sum_j m_j (p_i + p_j) / (rho_i rho_j) grad W (and
     the same for tau), instead of eqs. (6)-(7), whose m_j p_i / rho_i^2 weighs a neighbour of
-    another density wrongly."""
+    another density wrongly.
+
+    With `pore` (numerics.pore_pressure_gradient = "corrected"), targets with pore[i] < 1 (pore water)
+    take the pressure part as -(1 / rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad_i W_ij instead
+    (pore_pressure_gradient.py: exact for a linear pressure, not pairwise momentum-conserving), blended
+    to the symmetric form where their water support is cut; every other part is unchanged."""
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
@@ -63,6 +71,13 @@ def fluid_rates(
         d_rho = 0.0
         a0 = a1 = a2 = 0.0
         x0 = x1 = x2 = 0.0
+        corrected = False
+        if pore is not None:
+            corrected = pore[i] < 1.0
+        sp0 = sp1 = sp2 = g0 = g1 = g2 = den = 0.0  # corrected pore water only
+        if pore is not None and corrected:
+            den = mass[i] / rho_i * cubic_spline_w(0.0, h, norm)  # the lists hold no self pair
+        m0 = m1 = m2 = m3 = m4 = m5 = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
             d0 = xi0 - x[j, 0]
@@ -89,6 +104,26 @@ def fluid_rates(
                 coef = -(p[i] + p[j]) / (rho_i * rho_j)
             else:
                 coef = -(pi_r2 + p[j] * rj2)  # eq. (7): sigma = -p delta
+            if pore is not None and corrected:  # the pressure part summed apart, in both forms
+                sym = coef * m_j * fr
+                sp0 += sym * d0
+                sp1 += sym * d1
+                sp2 += sym * d2
+                coef = 0.0
+                v_j = m_j / rho_j
+                vf = v_j * fr * (p[j] - p[i])
+                g0 += vf * d0  # sum_j V_j (p_j - p_i) grad_i W_ij, grad_i W_ij = fr x_ij
+                g1 += vf * d1
+                g2 += vf * d2
+                vf = v_j * fr
+                m0 -= vf * d0 * d0  # M = -sum_j V_j fr x_ij (x) x_ij
+                m1 -= vf * d1 * d1
+                m3 -= vf * d0 * d1
+                if is3d is not None:
+                    m2 -= vf * d2 * d2
+                    m4 -= vf * d1 * d2
+                    m5 -= vf * d0 * d2
+                den += v_j * cubic_spline_w(r, h, norm)
             if av_alpha is not None:  # eq. (19), branch-free: zero unless vr < 0
                 if mixed is not None:  # pair means of c, alpha, beta
                     mj = material[j]
@@ -128,6 +163,12 @@ def fluid_rates(
             if apparent is not None:
                 d_rho *= rho_i
             drho[i] += d_rho
+        if pore is not None and corrected:
+            det, q0, q1, q2 = solve_m(m0, m1, m2, m3, m4, m5, g0, g1, g2, is3d)
+            wc = corrected_weight(den, det)
+            a0 += (1.0 - wc) * sp0 - wc * q0 / rho_i
+            a1 += (1.0 - wc) * sp1 - wc * q1 / rho_i
+            a2 += (1.0 - wc) * sp2 - wc * q2 / rho_i
         acc[i, 0] += a0
         acc[i, 1] += a1
         if is3d is not None:
@@ -168,13 +209,27 @@ class FluidRates(Term):
         self.xsph_eps = num.xsph_epsilon
         self.mixed = True if len(water) > 1 else None  # per-pair material look-ups only if needed
         self.apparent = True if saturated_mixture(scene) else None  # pore water next to free water
+        # numerics.pore_pressure_gradient = "corrected": the pore water's pressure by the corrected
+        # difference form (pore_pressure_gradient.py); the field that marks pore water, or None
+        self.pore = pore_field(scene) if num.pore_pressure_gradient == "corrected" else None
         self.reads = (
             ("x", "v", "rho", "p", "mass")
             + (("tau",) if self.viscous else ())
             + (("material",) if self.mixed else ())
+            + ((self.pore,) if self.pore else ())
         )
+        if self.pore == "pore_label":
+            self.fields["pore_label"] = PORE_LABEL
         self.adds_to = ("acc",) + (("drho",) if self.continuity else ())
         equations = [Equation("pressure gradient", "seed eqs. (7)-(9)")]
+        if self.pore:
+            equations.append(
+                Equation(
+                    "pore water: -(1/rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad W_ij, "
+                    "M_i = sum_j V_j grad W_ij (x) x_ji (not pairwise momentum-conserving)",
+                    "Randles & Libersky (1996); Bonet & Lok (1999)",
+                )
+            )
         if self.continuity:
             self.fields["rho_half"] = RHO_HALF
             self.integrates = (Integrated("rho", "rho_half", "drho"),)
@@ -200,4 +255,5 @@ class FluidRates(Term):
             self.sound_speed, ctx.h, ctx.norm, ps["drho"] if self.continuity else None, ps["acc"],
             ps["tau"] if self.viscous else None, self.av_alpha, self.av_beta,
             ps["xsph"] if self.xsph_eps > 0 else None, self.xsph_eps, ctx.is3d, self.mixed, self.apparent,
+            ps[self.pore] if self.pore else None,
         )  # fmt: skip
