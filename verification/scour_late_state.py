@@ -2,7 +2,10 @@
 the end wall, the trough upstream of it, the pore water's drift and the soil's and pore water's speeds,
 from a study run's outputs in runs/scour_study/<case>/ (scour.csv, scour_profiles.csv, particles.h5).
 
-    python -m verification.scour_late_state saturated_q0.11_dx5mm [--times 1 2]
+    python -m verification.scour_late_state saturated_q0.11_dx5mm [--times 1 2] [--figure PNG]
+
+--figure: the particles next to the end wall at those times (soil coloured by speed, pore and free water
+pale blue), a close-up of what the late d measures.
 
 Pore water: the water particles inside the layer (0 <= x <= length, z < the surface) at t = 0, followed
 by id. The mound: z_s(x, t) - z_s(x, 0) at the last profile column before the end wall.
@@ -13,7 +16,6 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -44,6 +46,7 @@ def main(argv=None):
     p.add_argument("case")
     p.add_argument("--times", type=float, nargs="+", default=[1.0, 2.0])
     p.add_argument("--length", type=float, default=0.25)
+    p.add_argument("--figure", help="write the end-wall close-up at --times to this PNG")
     a = p.parse_args(argv)
     run = RUNS / a.case
     if not (run / "particles.h5").exists():
@@ -76,13 +79,46 @@ def main(argv=None):
         deep = inpore & (pos[:, 1] < 0.05)
         print(
             f"t = {ts:g} s: d = {1e3 * float(r['depth_m']):.2f} mm at x = {float(r['x_deepest_m']):.4f} m,"
-            f" eroded {1e4 * float(r['eroded_area_m2']):.3f} cm2; mound {1e3 * (zs[tz][last] - zs[0.0][last]):.2f}"
+            f" eroded {1e4 * float(r['eroded_area_m2']):.3f} cm2;"
+            f" mound {1e3 * (zs[tz][last] - zs[0.0][last]):.2f}"
             f" mm (profile t = {tz:g}); pore water: {inpore.sum()} left, mean displacement"
             f" {1e3 * disp.mean():.2f} mm, {int((disp > 0.0025).sum())} moved > dx/2, max speed"
             f" {speed[inpore].max():.3f} m/s ({speed[deep].max() if deep.any() else float('nan'):.4f} below"
-            f" z = 0.05 m); soil max speed {speed[soil].max():.4f} m/s (max over {LATE:g} s to t: {upto:.4f})"
+            f" z = 0.05 m); soil particles gone (outlet) {int((m0 != water).sum() - soil.sum())};"
+            f" soil max speed {speed[soil].max():.4f} m/s (max over {LATE:g} s to t: {upto:.4f})"
         )
+    if a.figure:
+        end_wall_figure(series, a.times, a.length, a.case, a.figure)
     return 0
+
+
+def end_wall_figure(series, times, length, case, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(
+        len(times), 1, figsize=(8, 1.9 * len(times)), squeeze=False, sharex=True, layout="constrained"
+    )
+    for ax, t in zip(axes[:, 0], times):
+        ts, snap = nearest(series, t)
+        pos, mat = snap["position"], snap["material"]
+        speed = np.linalg.norm(snap["velocity"], axis=1)
+        w = mat == WATER
+        ax.scatter(pos[w, 0], pos[w, 1], s=5, c="tab:blue", alpha=0.35, lw=0)
+        sc = ax.scatter(pos[~w, 0], pos[~w, 1], s=9, c=speed[~w], cmap="inferno", vmin=0, vmax=0.1, lw=0)
+        ax.axvline(length, color="k", lw=0.6)
+        ax.axhline(SURFACE, color="k", lw=0.6, ls=":")
+        ax.set_xlim(length - 0.1, length + 0.03)
+        ax.set_ylim(SURFACE - 0.035, SURFACE + 0.03)
+        ax.set_aspect("equal")
+        ax.text(0.01, 0.9, f"{case}, t = {ts:g} s", transform=ax.transAxes, fontsize=8)
+    fig.colorbar(sc, ax=axes[:, 0], shrink=0.5, label="soil speed (m/s)")
+    axes[-1, 0].set_xlabel("x (m); end wall at the solid line, initial surface dotted")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    print(f"figure: {path}")
 
 
 if __name__ == "__main__":
