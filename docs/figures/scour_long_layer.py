@@ -151,7 +151,8 @@ def profiles_figure(runs, q):
 
 def snapshots_figure(case, L, q):
     """Particles of the long run at SNAPSHOT_TIMES (those reached): water blue, sand coloured by its
-    horizontal displacement since t = 0 (by particle id). Needs the run's HDF5 series (not committed)."""
+    horizontal displacement since t = 0 (by particle id), and the last snapshot. Needs the run's HDF5
+    series (not committed)."""
     from solver.output.hdf5_writer import read_series
 
     path = RUNS / case / "particles.h5"
@@ -163,30 +164,32 @@ def snapshots_figure(case, L, q):
     sand0 = f0["material"] == 1
     x0 = dict(zip(f0["id"][sand0], f0["position"][sand0, 0]))
     picks = [(t, f) for t, f in series if any(abs(t - ts) < 1e-6 for ts in SNAPSHOT_TIMES)]
-    height = 2.1 * len(picks) + 0.6
-    fig, axs = plt.subplots(len(picks), 1, figsize=(13, height), squeeze=False)
-    fig.subplots_adjust(left=0.05, right=0.9, top=1 - 0.5 / height, bottom=0.05, hspace=0.35)
+    if series[-1][0] > picks[-1][0] + 1e-9:  # and the last time reached
+        picks.append(series[-1])
+    height = 3.5 * len(picks) + 0.6
+    fig, axs = plt.subplots(len(picks), 1, figsize=(10, height), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, top=1 - 0.5 / height, bottom=0.05, hspace=0.35)
     for ax, (t, f) in zip(axs[:, 0], picks):
         x, m = f["position"], f["material"]
         w = m == 0
         ax.scatter(x[w, 0], x[w, 1], s=1.0, c="tab:blue", alpha=0.35, lw=0)
         s_ = m == 1
         dxs = np.array([x[k, 0] - x0.get(i, x[k, 0]) for k, i in zip(np.flatnonzero(s_), f["id"][s_])])
-        sc = ax.scatter(x[s_, 0], x[s_, 1], c=dxs * 1e3, cmap="magma_r", vmin=0, vmax=5, lw=0,
+        sc = ax.scatter(x[s_, 0], x[s_, 1], c=dxs * 1e3, cmap="magma_r", vmin=0, vmax=2, lw=0,
                         s=3.0)  # fmt: skip
         ax.fill([-0.05, 0, 0, -0.05], [0, 0, 0.105, 0.105], color="grey")
         ax.fill([L, L + 0.03, L + 0.03, L], [0, 0, 0.095, 0.095], color="grey")
         ax.set(xlim=(-0.055, L + 0.035), ylim=(0, 0.23), aspect="equal")
         ax.set_title(f"t = {t:g} s", fontsize=9, loc="left")
-    fig.colorbar(sc, cax=fig.add_axes([0.92, 0.2, 0.012, 0.6]), label="sand: x - x(0) (mm)")
+    fig.colorbar(sc, cax=fig.add_axes([0.9, 0.2, 0.015, 0.6]), label="sand: x - x(0) (mm)")
     fig.suptitle(f"{case}: water (blue), sand by its downstream displacement; saturated q = {q:.2f} m²/s")
     fig.savefig(OUT_SNAPSHOTS, dpi=110)
 
 
 def table(runs):
     """The doc's table: d at fixed times, then d, its place, d by zone and the eroded area at tc, the
-    latest time every run reached (so the layers are compared at one time), and the run's cost."""
-    tc = min(c["summary"]["t_reached"] for c, _ in runs)
+    latest output time every run has (so the layers are compared at one time), and the run's cost."""
+    tc = min(float(c["t_s"][-1]) for c, _ in runs)  # the last output time every run has
     print(
         f"| run | t reached (s) | d 0.5 / 1 / 1.5 / 2 / 3 s (mm) | at tc = {tc:g} s: d (mm) | x deepest (m) "
         "| d_nappe (mm) | d_wall (mm) | eroded (cm²) | change over the last 0.5 s "
