@@ -98,11 +98,13 @@ def check_open_boundaries(s) -> list[tuple[str, str]]:
             if len(vec) != dim:
                 return [(f"{key}.{field}", f"needs {dim} components")]
         for field in ("direction",) + (("across",) if inlet.across is not None else ()):
-            if np.linalg.norm(getattr(inlet, field)) == 0:
+            vec = np.asarray(getattr(inlet, field), float)
+            if not np.all(np.isfinite(vec)):
+                return [(f"{key}.{field}", "must be finite")]
+            if not np.any(vec):
                 return [(f"{key}.{field}", "must not be the zero vector")]
         if inlet.across is not None:
-            d = np.asarray(inlet.direction, float) / np.linalg.norm(inlet.direction)
-            a = np.asarray(inlet.across, float) / np.linalg.norm(inlet.across)
+            d, a = unit(inlet.direction), unit(inlet.across)
             if abs(d[0] * a[1] - d[1] * a[0]) < 0.1:
                 return [(f"{key}.across", "is (nearly) parallel to direction: no flow crosses the section")]
         o = np.asarray(inlet.origin, float)
@@ -138,14 +140,21 @@ def check_open_boundaries(s) -> list[tuple[str, str]]:
     return []
 
 
+def unit(vector) -> np.ndarray:
+    """A direction given as any finite non-zero vector, normalised without overflow (scaled by its
+    largest component first: a component of 1e308 squares to inf)."""
+    v = np.asarray(vector, float)
+    v = v / np.max(np.abs(v))
+    return v / np.linalg.norm(v)
+
+
 def _inlet_extent(s, inlet, lo, hi, eps):
     """(key, reason) if the section, its buffer or its prefill does not fit the domain, or the
     inflow is faster than the water's sound speed; else None. These bound the particles an inlet
     creates (a huge q, width, layer count or prefill time is refused, not allocated)."""
     dx = s.scene.spacing
-    d = np.asarray(inlet.direction, float) / np.linalg.norm(inlet.direction)
-    a = np.array([-d[1], d[0]]) if inlet.across is None else np.asarray(inlet.across, float)
-    a = a / np.linalg.norm(a)
+    d = unit(inlet.direction)
+    a = np.array([-d[1], d[0]]) if inlet.across is None else unit(inlet.across)
     cos = abs(a[0] * d[1] - a[1] * d[0])  # d . n, n the section's unit normal
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         if inlet.width is None:

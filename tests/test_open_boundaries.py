@@ -314,3 +314,17 @@ def test_restart_on_two_ranks_keeps_the_volume_balance(tmp_path):
     assert water["stored_start"] == first["stored_start"]
     assert water["inflow"] > first["inflow"] and water["outflow"] > first["outflow"]
     assert water["within_one_particle"], water
+
+
+def test_a_huge_direction_is_normalised_without_overflow():
+    """The fuzzer's `inlets.0.across.0 = huge negative` squared to inf in np.linalg.norm (a
+    RuntimeWarning, then a zero vector); scene_open.unit scales by the largest component first."""
+    import warnings
+
+    from solver.scene_open import unit
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(unit([-1.7e308, 1.7e308]), [-(0.5**0.5), 0.5**0.5])
+        np.testing.assert_allclose(unit([-1e308, 1.0]), [-1.0, 1e-308])
+        np.testing.assert_allclose(unit([3.0, 4.0]), [0.6, 0.8])

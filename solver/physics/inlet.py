@@ -42,6 +42,7 @@ import math
 import numpy as np
 
 from ..particles import FieldSpec
+from ..scene_open import unit
 from ..term import Equation, Stage, Term
 
 ID_STRIDE = 2**40
@@ -61,10 +62,8 @@ class InletZone:
         self.name = spec.name
         self.material = materials.index(spec.material)
         self.rho0 = float(materials.rho0[self.material])
-        d = np.asarray(spec.direction, float)
-        self.d = d / np.linalg.norm(d)
-        a = np.array([-self.d[1], self.d[0]]) if spec.across is None else np.asarray(spec.across, float)
-        self.a = a / np.linalg.norm(a)
+        self.d = unit(spec.direction)
+        self.a = np.array([-self.d[1], self.d[0]]) if spec.across is None else unit(spec.across)
         n = np.array([self.a[1], -self.a[0]])
         self.n = n if n @ self.d > 0 else -n  # normal on the downstream side
         self.cos = float(self.n @ self.d)
