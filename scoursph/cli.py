@@ -207,10 +207,11 @@ def _run(args):
             _fail(f"{exc}; outputs written so far are kept in {run_dir}/", 1)
         return 1
     if comm.is_root():
+        # three significant digits: a small or slow run read "0.00 M" with two decimals
         print(
             f"run completed: {result.steps} steps, {result.particles} particles, {result.wall_time:.1f} s "
             "wall, "
-            f"{result.particle_steps_per_second / 1e6:.2f} M particle-steps/s"
+            f"{result.particle_steps_per_second / 1e6:.3g} M particle-steps/s"
         )
         out = result.out_dir  # a restart's is the run directory it continues
         print(
