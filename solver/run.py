@@ -23,6 +23,7 @@ import numpy as np
 from . import __version__
 from .errors import BlowUpError
 from .interrupt import Interrupted, StopSignals, exit_status
+from .materials import Phase
 from .output.atomic import atomic_write_text
 from .output.balance import VolumeLedger
 from .output.checkpoint import Checkpointer, open_restart, resume_outputs
@@ -285,6 +286,9 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
                     scalar=scene.output.render_field,
                     title=f"{scene.scene.name}  t = {sim.t:.4f} s",
                     domain=(scene.domain.min, scene.domain.max),
+                    bodies=[b.vertices for b in scene.bodies],
+                    material_names=sim.plan.materials.names,
+                    water_ids=sim.plan.materials.ids_of_phase(Phase.WATER),
                 )
         if comm.is_root() and summary["wall_reflections"] > 0:
             print(reflection_warning(summary["wall_reflections"]), file=sys.stderr)

@@ -133,3 +133,35 @@ def test_blow_up_stops_with_what_where_when_and_keeps_outputs(tmp_path):
     )  # what
     assert [t for t, _ in read_series(out / "particles.h5")] == [0.0]  # what was written is kept
     assert "blew up" in json.loads((out / "run.json").read_text())["status"]
+
+
+def _colour_fractions(img):
+    """Fractions of the picture that are blue (water), sandy (soil: red over blue) and mid grey (a body);
+    sphere shading varies the shades, so hues are counted, not exact colours."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    grey = (np.abs(r - g) < 0.04) & (np.abs(g - b) < 0.04) & (r > 0.3) & (r < 0.7)
+    return (b > r + 0.15).mean(), (r > b + 0.15).mean(), grey.mean()
+
+
+def test_saturated_bed_picture_shows_pore_water_over_soil_and_the_body(tmp_path):
+    """A soil and a pore-water particle at every site used to z-fight into half-coloured balls, and
+    rigid bodies were not drawn: the water is now drawn on top of the soil, smaller, and bodies grey."""
+    import matplotlib.image as mpimg
+
+    from solver.output.render import render_snapshot
+
+    sites = np.stack(np.meshgrid(np.arange(0.0025, 0.2, 0.005), np.arange(0.0025, 0.1, 0.005)), -1).reshape(
+        -1, 2
+    )
+    fields = {
+        "position": np.vstack([sites, sites]),
+        "material": np.repeat([1, 0], len(sites)),  # sand (id 1) first, pore water (id 0) at the same sites
+        "velocity": np.zeros((2 * len(sites), 2)),
+    }
+    png = tmp_path / "bed.png"
+    body = [[0.2, 0.0], [0.25, 0.0], [0.25, 0.12], [0.2, 0.12]]
+    render_snapshot(fields, png, scalar="material", domain=([0.0, 0.0], [0.25, 0.15]), bodies=[body],
+                    material_names=("water", "sand"), water_ids=[0])  # fmt: skip
+    water, soil, grey = _colour_fractions(mpimg.imread(png))
+    # the bed covers ~45 % of the picture, the body ~10 %: each must show (the water was hidden before)
+    assert water > 0.05 and soil > 0.05 and grey > 0.03, (water, soil, grey)

@@ -14,8 +14,20 @@ import pyvista as pv
 from .atomic import atomic_path
 from .vtk_writer import particles_polydata
 
+# Categorical colours for `render_field = "material"`: water blue, soils in earth tones (in scene order)
+WATER_COLOUR = "#2b7bba"
+SOIL_COLOURS = ("#c8a165", "#8c6d46", "#d9c59a", "#6b4f2a")
+BODY_COLOUR = "#9a9a9a"
+# A saturated bed puts a soil and a pore-water particle at every site: drawn as equal spheres they
+# z-fight into half-coloured balls. Soil is drawn first and water on top, smaller, so both show.
+WATER_ON_SOIL_SIZE = 0.55
 
-def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None, domain=None):
+
+def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None, domain=None, bodies=(),
+                    material_names=None, water_ids=()):  # fmt: skip
+    """A PNG of one snapshot. bodies: polygons (vertex arrays) drawn in grey; material_names and
+    water_ids (the materials' names in id order and the water materials' ids) let a scene with
+    water and soil draw its water on top of its soil, and `scalar = "material"` draw named colours."""
     pv.OFF_SCREEN = True
     cloud = particles_polydata(fields)
     if scalar not in cloud.point_data:  # the scene schema refuses this (output.render_field)
@@ -29,26 +41,31 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     # 20 % wider than the domain: tight() centres the domain, the colour bar sits in the margin
     plotter = pv.Plotter(off_screen=True, window_size=(1600, int(np.clip(1600 / 1.2 * aspect, 300, 1400))))
     plotter.set_background("white")
-    span = (
-        np.ptp(np.asarray(domain), axis=0).max() if domain is not None else np.ptp(cloud.points, axis=0).max()
-    )
-    size = point_size or max(2.0, 1200.0 / max(span / max(_spacing(cloud.points), 1e-12), 1.0))
-    plotter.add_mesh(
-        cloud,
-        scalars=scalar,
-        point_size=size,
-        render_points_as_spheres=True,
-        cmap="viridis",
-        scalar_bar_args={
-            "title": scalar,
-            "color": "black",
-            "vertical": True,
-            "position_x": 0.925,
-            "position_y": 0.1,
-            "width": 0.05,
-            "height": 0.8,
-        },
-    )
+    span = float(np.max(hi - lo))
+    material = np.asarray(fields["material"]).ravel() if "material" in fields else np.zeros(cloud.n_points)
+    water = np.isin(material, np.asarray(water_ids, dtype=int)) if "material" in fields else material > 0
+    layered = bool(water.any() and (~water).any())  # water and soil in one picture
+    spacing = _spacing(cloud.points[~water] if layered else cloud.points)
+    size = point_size or max(2.0, 1200.0 / max(span / max(spacing, 1e-12), 1.0))
+    for polygon in bodies:
+        _add_body(plotter, polygon, z=-2.0 * spacing)
+    # a sphere's depth bulges by its radius towards the camera: water sits two spacings above the soil
+    layers = [(~water, size, 0.0), (water, WATER_ON_SOIL_SIZE * size, 2.0 * spacing)] if layered else [
+        (np.ones(cloud.n_points, bool), size, 0.0)]  # fmt: skip
+    if scalar == "material" and material_names is not None and "material" in fields:
+        _add_materials(plotter, cloud, layers, material_names, water_ids)
+    else:
+        values = np.asarray(cloud.point_data[scalar])
+        values = values if values.ndim == 1 else np.linalg.norm(values, axis=1)
+        clim = (float(values.min()), float(values.max())) if values.size else None
+        for k, (mask, layer_size, z) in enumerate(layers):
+            if not mask.any():
+                continue
+            part = _subset(cloud, mask, z)
+            plotter.add_mesh(
+                part, scalars=scalar, clim=clim, point_size=layer_size, render_points_as_spheres=True,
+                cmap="viridis", show_scalar_bar=k == 0, scalar_bar_args=_bar(scalar),
+            )  # fmt: skip
     if domain is not None:
         box = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], 0, 0))
         plotter.add_mesh(box, style="wireframe", color="black")
@@ -61,6 +78,53 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
         plotter.screenshot(str(tmp))
     plotter.close()
     return png_path
+
+
+def _bar(title):
+    return {"title": title, "color": "black", "vertical": True, "position_x": 0.925, "position_y": 0.1,
+            "width": 0.05, "height": 0.8}  # fmt: skip
+
+
+def _subset(cloud, mask, z):
+    """The points of `cloud` where mask holds, with their point data, lifted by z towards the camera
+    of view_xy (so they are drawn over what lies at z = 0)."""
+    points = np.array(cloud.points[mask], dtype=float)
+    points[:, 2] += z
+    part = pv.PolyData(points)
+    for name in cloud.point_data:
+        part.point_data[name] = np.asarray(cloud.point_data[name])[mask]
+    return part
+
+
+def _add_materials(plotter, cloud, layers, names, water_ids):
+    """One colour per material, named in a legend."""
+    material = np.asarray(cloud.point_data["material"]).ravel().astype(int)
+    waters = {int(w) for w in water_ids}
+    soils = [k for k in range(len(names)) if k not in waters]
+    colours = {k: WATER_COLOUR for k in waters}
+    colours.update({k: SOIL_COLOURS[i % len(SOIL_COLOURS)] for i, k in enumerate(soils)})
+    legend = []
+    for mask, layer_size, z in layers:
+        for k, name in enumerate(names):
+            sel = mask & (material == k)
+            if not sel.any():
+                continue
+            plotter.add_mesh(_subset(cloud, sel, z), color=colours[k], point_size=layer_size,
+                             render_points_as_spheres=True)  # fmt: skip
+            if name not in [entry[0] for entry in legend]:
+                legend.append([name, colours[k]])
+    if legend:
+        plotter.add_legend(legend, bcolor="white", border=True, size=(0.14, 0.04 * len(legend) + 0.02),
+                           loc="upper right", face="circle")  # fmt: skip
+
+
+def _add_body(plotter, vertices, z):
+    """A rigid body's polygon, filled grey with a black outline."""
+    v = np.asarray(vertices, float)
+    points = np.column_stack([v[:, :2], np.full(len(v), z)])
+    face = np.concatenate([[len(v)], np.arange(len(v))])
+    polygon = pv.PolyData(points, faces=face)
+    plotter.add_mesh(polygon, color=BODY_COLOUR, show_edges=True, edge_color="black", line_width=2)
 
 
 def _spacing(points):
