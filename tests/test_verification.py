@@ -142,9 +142,10 @@ PLATEAU_NOISE = "plateau noise: sd of the acoustically filtered p* at sensor 2, 
 
 @pytest.mark.slow
 def test_impact_holds_and_arrives_in_time_at_ci_resolution(impact_ci):
-    """No blow-up, zero wall reflections, impact time inside the experiment's window (the plateau
-    mean is a known discrepancy against the experiment and the 2D interFoam reference alike, pinned by
-    strict xfails)."""
+    """No blow-up, zero wall reflections, impact time inside the experiment's window, first-impact pressure
+    impulse at sensor 2 inside the band's spread + the study's allowance (measured -0.070 against 0.306 at
+    H/20) (the plateau mean is a known discrepancy against the experiment and the 2D interFoam reference
+    alike, pinned by strict xfails)."""
     assert impact_ci.figure.is_file()
     known = (PLATEAU_MEAN, PLATEAU_MEAN_2D)
     failed = [c.line() for c in impact_ci.checks if not c.passed and c.metric not in known]

@@ -11,20 +11,7 @@ from verification import impact_pressure as ip
 from verification.common import save_study, timing_note
 from verification.impact_study.remetric import load
 
-KEYS = (
-    "status",
-    "reflections",
-    "impact_s1",
-    "impact_s2",
-    "peak_s1",
-    "peak_s2",
-    "peak_s3",
-    "plateau_mean_s1",
-    "plateau_mean_s2",
-    "plateau_sd_s1",
-    "plateau_sd_s2",
-    "plateau_sd_1ms_s2",
-)
+KEYS = ip.STUDY_KEYS
 
 
 def main():
