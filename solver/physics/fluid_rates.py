@@ -250,8 +250,9 @@ class FluidRates(Term):
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
         v = ctx.image_velocity(self, "v")
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         fluid_rates(
-            nl.targets, nl.start, nl.index, ps["x"], v, ps["rho"], ps["p"], ps["mass"], ps["material"],
+            nl.targets, start, index, ps["x"], v, ps["rho"], ps["p"], ps["mass"], ps["material"],
             self.sound_speed, ctx.h, ctx.norm, ps["drho"] if self.continuity else None, ps["acc"],
             ps["tau"] if self.viscous else None, self.av_alpha, self.av_beta,
             ps["xsph"] if self.xsph_eps > 0 else None, self.xsph_eps, ctx.is3d, self.mixed, self.apparent,

@@ -136,8 +136,9 @@ class MidpointContinuity(Term):
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
         v_half = ctx.image_velocity(self, "v_half")
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         midpoint_continuity(
-            nl.targets, nl.start, nl.index, ps["x"], ps["x_prev"], v_half, ps["rho"], ps["mass"],
+            nl.targets, start, index, ps["x"], ps["x_prev"], v_half, ps["rho"], ps["mass"],
             ps["material"], self.sound_speed, ctx.h, ctx.norm, ps["drho"], self.delta,
             True if self.diffuse else None, ps["rho_ref"] if self.hydrostatic else None, ctx.is3d,
         )  # fmt: skip

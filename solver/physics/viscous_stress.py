@@ -87,10 +87,11 @@ class ViscousStress(Term):
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         viscous_stress(
             nl.targets,
-            nl.start,
-            nl.index,
+            start,
+            index,
             ps["x"],
             ps["v"],
             ps["rho"],
