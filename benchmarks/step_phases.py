@@ -54,14 +54,14 @@ def instrument(sim, clock):
         setattr(simulation, name, clock.wrap(name, getattr(simulation, name)))
 
 
-def build(kind):
+def build(kind, scheme=None):
     if kind == "soil":
         from bench_soil_step import soil_collapse
 
         return soil_collapse(25_000)
     from dam_break_setup import dam_break
 
-    return dam_break(25_000)
+    return dam_break(25_000, **({"numerics.scheme": scheme} if scheme else {}))
 
 
 def measure(sim, clock, threads, blocks, steps, rebuilds):
@@ -95,8 +95,9 @@ def main(argv=None):
     ap.add_argument("--blocks", type=int, default=10)
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--rebuilds", type=int, default=5)
+    ap.add_argument("--scheme", help='water only: numerics.scheme ("seed", "default"); default: the scene\'s')
     args = ap.parse_args(argv)
-    sim = build(args.kind)
+    sim = build(args.kind, args.scheme)
     clock = Clock()
     instrument(sim, clock)
     n = sim.particles.n_owned
@@ -105,7 +106,9 @@ def main(argv=None):
     wall1, cpu1, freq, rbw1, rbc1 = res[1]
     names = sorted(wall1, key=lambda k: -cpu1[k])
     total1 = wall1["step (total)"]
-    print(f"{args.kind} step, {n} particles, load {os.getloadavg()[0]:.1f}; ms per step (fastest block)")
+    scheme = f", scheme {args.scheme}" if args.scheme else ""
+    load = os.getloadavg()[0]
+    print(f"{args.kind} step{scheme}, {n} particles, load {load:.1f}; ms per step (fastest block)")
     head = f"{'phase':44s} {'cpu 1t':>8s} {'share':>6s} {'wall 1t':>8s}"
     if 2 in res:
         head += f" {'wall 2t':>8s} {'x':>5s}"

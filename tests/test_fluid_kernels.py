@@ -56,8 +56,7 @@ def test_viscous_stress_matches_twin(rng, dim):
     norm = cubic_spline_normalisation(dim, s["h"])
     viscous_stress(
         s["targets"],
-        s["nl"].start,
-        s["nl"].index,
+        *s["nl"].unsigned(),  # as the terms pass them (NeighbourList.unsigned)
         s["x"],
         s["v"],
         s["rho"],
@@ -94,8 +93,7 @@ def test_fluid_rates_match_twin(rng, dim, terms):
     norm = cubic_spline_normalisation(dim, s["h"])
     fluid_rates(
         s["targets"],
-        s["nl"].start,
-        s["nl"].index,
+        *s["nl"].unsigned(),  # as the terms pass them (NeighbourList.unsigned)
         s["x"],
         s["v"],
         s["rho"],
@@ -146,8 +144,7 @@ def test_pair_forces_conserve_linear_momentum(rng):
     drho, acc, xsph = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2))
     fluid_rates(
         s["targets"],
-        s["nl"].start,
-        s["nl"].index,
+        *s["nl"].unsigned(),  # as the terms pass them (NeighbourList.unsigned)
         s["x"],
         s["v"],
         s["rho"],
@@ -177,7 +174,7 @@ def _rates(s, p, pore, tau=None, av=False, eps=0.0, apparent=None):
     n, dim = len(s["x"]), s["dim"]
     drho, acc, xsph = np.zeros(n), np.zeros((n, dim)), np.zeros((n, dim))
     fluid_rates(
-        s["targets"], s["nl"].start, s["nl"].index, s["x"], s["v"], s["rho"], p, s["mass"], s["material"],
+        s["targets"], *s["nl"].unsigned(), s["x"], s["v"], s["rho"], p, s["mass"], s["material"],
         np.array([15.0]), s["h"], cubic_spline_normalisation(dim, s["h"]), drho, acc, tau,
         np.array([0.3]) if av else None, np.array([0.2]) if av else None, xsph if eps > 0 else None, eps,
         True if dim == 3 else None, None, apparent, pore,

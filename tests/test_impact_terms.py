@@ -22,7 +22,7 @@ from verification.common import scene_from_file
 def fused(x, x_old, v, rho, mass, h, dim, nl, targets, rho_ref=None, diffuse=False):
     out = np.zeros(len(x))
     midpoint_continuity(
-        targets, nl.start, nl.index, x, x_old, v, rho, mass, np.zeros(len(x), np.int32), np.array([C0]), h,
+        targets, *nl.unsigned(), x, x_old, v, rho, mass, np.zeros(len(x), np.int32), np.array([C0]), h,
         cubic_spline_normalisation(dim, h), out, DELTA, True if diffuse else None, rho_ref,
         True if dim == 3 else None,
     )  # fmt: skip

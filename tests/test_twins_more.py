@@ -28,7 +28,7 @@ def test_continuity_matches_twin(rng, dim):
     norm = cubic_spline_normalisation(dim, s["h"])
     rho = np.full(n, 1000.0)
     midpoint_continuity(
-        s["targets"], s["nl"].start, s["nl"].index, s["x"], s["x"], s["v"], rho, s["mass"],
+        s["targets"], *s["nl"].unsigned(), s["x"], s["x"], s["v"], rho, s["mass"],
         np.zeros(n, np.int32), np.array([20.0]), s["h"], norm, drho, 0.0, None, None,
         True if dim == 3 else None,
     )  # fmt: skip
@@ -52,7 +52,7 @@ def test_fluid_rates_mixed_materials_match_twin(rng, dim):
     def kernel(material, c, alpha, beta, mixed):
         drho, acc = np.zeros(n), np.zeros((n, dim))
         fluid_rates(
-            s["targets"], s["nl"].start, s["nl"].index, s["x"], s["v"], s["rho"], p, s["mass"], material, c,
+            s["targets"], *s["nl"].unsigned(), s["x"], s["v"], s["rho"], p, s["mass"], material, c,
             s["h"], norm, drho, acc, None, alpha, beta, None, 0.0, is3d, mixed,
         )  # fmt: skip
         return drho, acc

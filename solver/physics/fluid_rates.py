@@ -52,7 +52,15 @@ def fluid_rates(
     With `pore` (numerics.pore_pressure_gradient = "corrected"), targets with pore[i] < 1 (pore water)
     take the pressure part as -(1 / rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad_i W_ij instead
     (pore_pressure_gradient.py: exact for a linear pressure, not pairwise momentum-conserving), blended
-    to the symmetric form where their water support is cut; every other part is unchanged."""
+    to the symmetric form where their water support is cut; every other part is unchanged.
+
+    A neighbour's x and v are read from flat views at j * dim + column, dim a compile-time
+    constant: a 2D array's row stride is a run-time value (as in soil_rates.py)."""
+    dim = 3 if is3d is not None else 2
+    if x.shape[1] != dim or v.shape[1] != dim:
+        raise ValueError("fluid_rates: x and v must have 3 columns with is3d=True, 2 without")
+    xflat = x.reshape(x.size)  # not vf/xf: the corrected pore branch has a scalar vf
+    vflat = v.reshape(v.size)
     hh = 0.01 * h * h
     for t in prange(targets.shape[0]):
         i = targets[t]
@@ -80,14 +88,15 @@ def fluid_rates(
         m0 = m1 = m2 = m3 = m4 = m5 = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
-            d0 = xi0 - x[j, 0]
-            d1 = xi1 - x[j, 1]
-            u0 = vi0 - v[j, 0]
-            u1 = vi1 - v[j, 1]
+            xj = j * dim
+            d0 = xi0 - xflat[xj]
+            d1 = xi1 - xflat[xj + 1]
+            u0 = vi0 - vflat[xj]
+            u1 = vi1 - vflat[xj + 1]
             d2 = u2 = 0.0
             if is3d is not None:
-                d2 = xi2 - x[j, 2]
-                u2 = vi2 - v[j, 2]
+                d2 = xi2 - xflat[xj + 2]
+                u2 = vi2 - vflat[xj + 2]
             r2 = d0 * d0 + d1 * d1 + d2 * d2
             r = np.sqrt(r2) + 1e-300
             vr = u0 * d0 + u1 * d1 + u2 * d2
@@ -250,8 +259,9 @@ class FluidRates(Term):
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
         v = ctx.image_velocity(self, "v")
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         fluid_rates(
-            nl.targets, nl.start, nl.index, ps["x"], v, ps["rho"], ps["p"], ps["mass"], ps["material"],
+            nl.targets, start, index, ps["x"], v, ps["rho"], ps["p"], ps["mass"], ps["material"],
             self.sound_speed, ctx.h, ctx.norm, ps["drho"] if self.continuity else None, ps["acc"],
             ps["tau"] if self.viscous else None, self.av_alpha, self.av_beta,
             ps["xsph"] if self.xsph_eps > 0 else None, self.xsph_eps, ctx.is3d, self.mixed, self.apparent,

@@ -42,7 +42,14 @@ def midpoint_continuity(
     """drho_i = sum_j m_j (v_i - v_j) . grad_i W_ij + D_i with every position at the midpoint
     (x + x_old) / 2 (written, not added). `diffuse` not None adds the density diffusion
     D_i = delta h c0 sum_j 2 (q_i - q_j) (dW/dr / r) V_j, q = rho or rho - rho_ref (the pair
-    form of density_diffusion.density_diffusion)."""
+    form of density_diffusion.density_diffusion). A neighbour's x, x_old and v are read from flat
+    views at j * dim + column, dim a compile-time constant (as in soil_rates.py)."""
+    dim = 3 if is3d is not None else 2
+    if x.shape[1] != dim or x_old.shape[1] != dim or v.shape[1] != dim:
+        raise ValueError("midpoint_continuity: x, x_old and v must have 3 columns with is3d=True, 2 without")
+    xf = x.reshape(x.size)
+    of = x_old.reshape(x_old.size)
+    vf = v.reshape(v.size)
     for t in prange(targets.shape[0]):
         i = targets[t]
         xi0 = 0.5 * (x[i, 0] + x_old[i, 0])
@@ -58,13 +65,14 @@ def midpoint_continuity(
         dif = 0.0
         for s in range(start[t], start[t + 1]):
             j = index[s]
-            d0 = xi0 - 0.5 * (x[j, 0] + x_old[j, 0])
-            d1 = xi1 - 0.5 * (x[j, 1] + x_old[j, 1])
-            vr = (vi0 - v[j, 0]) * d0 + (vi1 - v[j, 1]) * d1
+            xj = j * dim
+            d0 = xi0 - 0.5 * (xf[xj] + of[xj])
+            d1 = xi1 - 0.5 * (xf[xj + 1] + of[xj + 1])
+            vr = (vi0 - vf[xj]) * d0 + (vi1 - vf[xj + 1]) * d1
             d2 = 0.0
             if is3d is not None:
-                d2 = xi2 - 0.5 * (x[j, 2] + x_old[j, 2])
-                vr += (vi2 - v[j, 2]) * d2
+                d2 = xi2 - 0.5 * (xf[xj + 2] + of[xj + 2])
+                vr += (vi2 - vf[xj + 2]) * d2
             r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
             fr = cubic_spline_dwdr(r, h, norm) / r
             d_rho += mass[j] * vr * fr
@@ -136,8 +144,9 @@ class MidpointContinuity(Term):
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
         v_half = ctx.image_velocity(self, "v_half")
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         midpoint_continuity(
-            nl.targets, nl.start, nl.index, ps["x"], ps["x_prev"], v_half, ps["rho"], ps["mass"],
+            nl.targets, start, index, ps["x"], ps["x_prev"], v_half, ps["rho"], ps["mass"],
             ps["material"], self.sound_speed, ctx.h, ctx.norm, ps["drho"], self.delta,
             True if self.diffuse else None, ps["rho_ref"] if self.hydrostatic else None, ctx.is3d,
         )  # fmt: skip

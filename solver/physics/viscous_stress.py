@@ -21,7 +21,13 @@ TAU = FieldSpec(N_SYM, np.float64, "viscous stress (eqs. 10-11), symmetric", Mir
 @kernel(parallel=True)
 def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, h, norm, tau, is3d=None):
     """tau_i = mu eps_i, seed eqs. (10)-(11), with the SPH velocity gradient (velocity_gradient.py).
-    tau has 6 symmetric components (solver/tensors.py). is3d: None in 2D (z code pruned)."""
+    tau has 6 symmetric components (solver/tensors.py). is3d: None in 2D (z code pruned). A neighbour's
+    x and v are read from flat views at j * dim + column, dim a compile-time constant (soil_rates.py)."""
+    dim = 3 if is3d is not None else 2
+    if x.shape[1] != dim or v.shape[1] != dim:
+        raise ValueError("viscous_stress: x and v must have 3 columns with is3d=True, 2 without")
+    xf = x.reshape(x.size)
+    vf = v.reshape(v.size)
     for t in prange(targets.shape[0]):
         i = targets[t]
         xi0, xi1 = x[i, 0], x[i, 1]
@@ -32,16 +38,17 @@ def viscous_stress(targets, start, index, x, v, rho, mass, material, viscosity, 
         g = velocity_gradient.ZERO
         for s in range(start[t], start[t + 1]):
             j = index[s]
-            d0 = xi0 - x[j, 0]
-            d1 = xi1 - x[j, 1]
+            xj = j * dim
+            d0 = xi0 - xf[xj]
+            d1 = xi1 - xf[xj + 1]
             d2 = u2 = 0.0
             if is3d is not None:
-                d2 = xi2 - x[j, 2]
-                u2 = vi2 - v[j, 2]
+                d2 = xi2 - xf[xj + 2]
+                u2 = vi2 - vf[xj + 2]
             r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
             f = cubic_spline_dwdr(r, h, norm) / r * mass[j] / rho[j]
             g = velocity_gradient.add_pair(
-                g, vi0 - v[j, 0], vi1 - v[j, 1], u2, f, d0, d1, d2, is3d is not None
+                g, vi0 - vf[xj], vi1 - vf[xj + 1], u2, f, d0, d1, d2, is3d is not None
             )
         g00, g01, g02, g10, g11, g12, g20, g21, g22 = g
         mu = viscosity[material[i]]
@@ -87,10 +94,11 @@ class ViscousStress(Term):
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
+        start, index = nl.unsigned()  # no negative-index wrap-around per neighbour gather
         viscous_stress(
             nl.targets,
-            nl.start,
-            nl.index,
+            start,
+            index,
             ps["x"],
             ps["v"],
             ps["rho"],
