@@ -59,7 +59,7 @@ def _pore(s):
     pore = np.zeros(len(s["x"]))
     nl = s["on_soil"]
     pore_pressure_at_soil(
-        nl.targets, nl.start, nl.index, s["x"], s["rho"], s["mass"], s["p"], s["h"], s["norm"], pore,
+        nl.targets, *nl.unsigned(), s["x"], s["mass"] / s["rho"], s["p"], s["h"], s["norm"], pore,
         True if s["dim"] == 3 else None,
     )  # fmt: skip
     return pore
@@ -75,13 +75,14 @@ def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None,
     is3d = True if dim == 3 else None
     solid = s["solid"] if mixture else np.zeros(3)
     corr = np.zeros((n, 6)) if kappa > 0 else None
+    vol = s["mass"] / s["rho"]
     lam_w = seepage_on_water(
-        s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["on_water"].targets, *s["on_water"].unsigned(), s["x"], s["v"], s["rho"], s["mass"], vol,
         s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc, drho if storage else None,
         s["p"] if mixture else None, pore, is3d, wall, one_soil, linear, corr, kappa,
     )  # fmt: skip
     lam_s = seepage_on_soil(
-        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["on_soil"].targets, *s["on_soil"].unsigned(), s["x"], s["v"], s["rho"], s["mass"], vol,
         s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall, corr,
     )  # fmt: skip
     if kappa > 0:

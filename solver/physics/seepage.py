@@ -159,20 +159,36 @@ C = n^2 rho_w g / k (= n^2 mu / k_intrinsic) keeps its value (as Morikawa & Asai
 
 
 @kernel(parallel=True)
-def pore_pressure_at_soil(targets, start, index, x, rho, mass, p, h, norm, pore, is3d=None):
+def volumes(n, mass, rho, out):
+    """V_i = m_i / rho_i of the first n rows, once per pass instead of a division per pair (the same
+    quotient, so the pair sums are unchanged)."""
+    for i in prange(n):
+        out[i] = mass[i] / rho[i]
+
+
+@kernel(parallel=True)
+def pore_pressure_at_soil(targets, start, index, x, vol, p, h, norm, pore, is3d=None):
     """p~_b = sum_a V_a p_a W_ab / sum_a V_a W_ab over the water neighbours a of soil b (Shepard
-    interpolation); 0 for soil with no water within reach (dry soil)."""
+    interpolation); 0 for soil with no water within reach (dry soil). vol: V = m / rho of every row
+    (volumes). Call with the lists' unsigned views and a C-contiguous x, as soil_rates: x is read
+    through a flat view at a compile-time stride."""
+    three = is3d is not None
+    dim = 3 if three else 2
+    if x.shape[1] != dim:
+        raise ValueError("pore_pressure_at_soil: x must have 3 columns with is3d=True, 2 without")
+    xf = x.reshape(x.size)
     for t in prange(targets.shape[0]):
         b = targets[t]
+        xb0, xb1 = x[b, 0], x[b, 1]
+        xb2 = x[b, 2] if three else 0.0
         num = den = 0.0
         for s in range(start[t], start[t + 1]):
             a = index[s]
-            d0 = x[b, 0] - x[a, 0]
-            d1 = x[b, 1] - x[a, 1]
-            d2 = 0.0
-            if is3d is not None:
-                d2 = x[b, 2] - x[a, 2]
-            w = mass[a] / rho[a] * cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
+            xa = a * dim
+            d0 = xb0 - xf[xa]
+            d1 = xb1 - xf[xa + 1]
+            d2 = xb2 - xf[xa + 2] if three else 0.0
+            w = vol[a] * cubic_spline_w(np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), h, norm)
             num += w * p[a]
             den += w
         pore[b] = num / den if den > 0.0 else 0.0
@@ -255,8 +271,8 @@ def pair_correction(m0, m1, m2, m3, m4, m5, den, kappa, is3d):
 
 
 @kernel(parallel=True)
-def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, solid, grain_density, h, norm,
-                     acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
+def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag, solid, grain_density, h,
+                     norm, acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
                      linear=None, corr=None, kappa=0.0):  # fmt: skip
     """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
     F = W'(r) / r):
@@ -292,6 +308,12 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
     blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
     and nothing else. one_soil: the material id when the scene has one soil material (then the
     per-material constants are loop invariants), else None."""
+    three = is3d is not None
+    dim = 3 if three else 2
+    if x.shape[1] != dim or v.shape[1] != dim:
+        raise ValueError("seepage_on_water: x and v must have 3 columns with is3d=True, 2 without")
+    xf = x.reshape(x.size)
+    vflat = v.reshape(v.size)
     worst = 0.0
     for t in prange(targets.shape[0]):
         a = targets[t]
@@ -314,14 +336,15 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
                 mb = material[b]
             else:
                 mb = one_soil
-            d0 = x[b, 0] - xa0
-            d1 = x[b, 1] - xa1
-            d2 = x[b, 2] - xa2 if is3d is not None else 0.0
-            u0 = va0 - v[b, 0]
-            u1 = va1 - v[b, 1]
-            u2 = va2 - v[b, 2] if is3d is not None else 0.0
+            xb = b * dim
+            d0 = xf[xb] - xa0
+            d1 = xf[xb + 1] - xa1
+            d2 = xf[xb + 2] - xa2 if three else 0.0
+            u0 = va0 - vflat[xb]
+            u1 = va1 - vflat[xb + 1]
+            u2 = va2 - vflat[xb + 2] if three else 0.0
             r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
-            vol_b = mass[b] / rho[b]
+            vol_b = vol[b]
             w = cubic_spline_w(r, h, norm)
             vw = vol_b * w
             vf = vol_b * cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
@@ -419,8 +442,8 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, material, drag, sol
 
 
 @kernel(parallel=True)
-def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, solid, h, norm, acc, pore=None,
-                    is3d=None, wall=None, corr=None):  # fmt: skip
+def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag, solid, h, norm, acc,
+                    pore=None, is3d=None, wall=None, corr=None):  # fmt: skip
     """Soil rows b, one loop over their water neighbours a: add sum_a F_ab / m_b (the pair force of
     the module docstring) with pore holding p^ on the water rows (seepage_on_water) and p~ on the
     soil rows (pore_pressure_at_soil); None in the seed formulation (no buoyancy):
@@ -430,6 +453,13 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
     wall: the fixed flags (None without fixed blocks); wall particles of fixed water blocks are
     walls, not pore water, and take no part in the coupling. corr: the water side's L_a (corrected
     mixture; None otherwise): the buoyancy's d becomes L_a d, as on the water side."""
+    three = is3d is not None
+    dim = 3 if three else 2
+    if x.shape[1] != dim or v.shape[1] != dim:
+        raise ValueError("seepage_on_soil: x and v must have 3 columns with is3d=True, 2 without")
+    xf = x.reshape(x.size)
+    vf = v.reshape(v.size)
+    cf = corr.reshape(corr.size) if corr is not None else xf
     worst = 0.0
     for t in prange(targets.shape[0]):
         b = targets[t]
@@ -443,27 +473,33 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, material, drag, soli
             a = index[s]
             if wall is not None and wall[a]:
                 continue
-            d0 = xb0 - x[a, 0]
-            d1 = xb1 - x[a, 1]
-            d2 = xb2 - x[a, 2] if is3d is not None else 0.0
+            xa = a * dim
+            d0 = xb0 - xf[xa]
+            d1 = xb1 - xf[xa + 1]
+            d2 = xb2 - xf[xa + 2] if three else 0.0
             r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) + 1e-300
-            vol_a = mass[a] / rho[a]
+            vol_a = vol[a]
             vw = vol_a * cubic_spline_w(r, h, norm)
             den += vw
-            w0 += vw * (v[a, 0] - vb0)
-            w1 += vw * (v[a, 1] - vb1)
-            if is3d is not None:
-                w2 += vw * (v[a, 2] - vb2)
+            w0 += vw * (vf[xa] - vb0)
+            w1 += vw * (vf[xa + 1] - vb1)
+            if three:
+                w2 += vw * (vf[xa + 2] - vb2)
             if pore is not None:
                 vfp = vol_a * cubic_spline_dwdr(r, h, norm) / r * (pore[a] - p_b)
                 if corr is None:
                     g0 += vfp * d0
                     g1 += vfp * d1
                     g2 += vfp * d2
-                else:
-                    g0 += vfp * (corr[a, 0] * d0 + corr[a, 3] * d1 + corr[a, 5] * d2)
-                    g1 += vfp * (corr[a, 3] * d0 + corr[a, 1] * d1 + corr[a, 4] * d2)
-                    g2 += vfp * (corr[a, 5] * d0 + corr[a, 4] * d1 + corr[a, 2] * d2)
+                elif three:
+                    ca = a * N_SYM
+                    g0 += vfp * (cf[ca] * d0 + cf[ca + 3] * d1 + cf[ca + 5] * d2)
+                    g1 += vfp * (cf[ca + 3] * d0 + cf[ca + 1] * d1 + cf[ca + 4] * d2)
+                    g2 += vfp * (cf[ca + 5] * d0 + cf[ca + 4] * d1 + cf[ca + 2] * d2)
+                else:  # 2D: L_a's xz, yz and zz components do not enter
+                    ca = a * N_SYM
+                    g0 += vfp * (cf[ca] * d0 + cf[ca + 3] * d1)
+                    g1 += vfp * (cf[ca + 3] * d0 + cf[ca + 1] * d1)
         mb = material[b]
         vol_b = mass[b] / rho[b]
         k = vol_b * drag[mb]
@@ -493,16 +529,34 @@ class PorePressureAtSoil(Term):
     def __init__(self):
         super().__init__()
         self.fields = {"pore_pressure": PORE_PRESSURE}
+        self.volumes = RowVolumes()
         self.reads = ("x", "rho", "mass", "p")
         self.writes = ("pore_pressure",)
         self.equations = (Equation("p~_b = sum_a V_a p_a W_ab / sum_a V_a W_ab", "Shepard interpolation"),)
 
     def run(self, ctx):
         ps, nl = ctx.particles, ctx.neighbours(self)
+        start, index = nl.unsigned()
         pore_pressure_at_soil(
-            nl.targets, nl.start, nl.index, ps["x"], ps["rho"], ps["mass"], ps["p"], ctx.h, ctx.norm,
+            nl.targets, start, index, ps["x"], self.volumes(ps), ps["p"], ctx.h, ctx.norm,
             ps["pore_pressure"], ctx.is3d,
         )  # fmt: skip
+
+
+class RowVolumes:
+    """V = m / rho of every row (owned, ghosts, images) in the term's scratch array (not a particle
+    field: rebuilt every pass, never exchanged), for the pair loops to gather instead of dividing
+    per pair."""
+
+    def __init__(self):
+        self._scratch = np.empty(0)
+
+    def __call__(self, ps):
+        n = ps.n_total
+        if self._scratch.shape[0] < n:
+            self._scratch = np.empty(int(n * 1.25) + 16)
+        volumes(n, ps["mass"], ps["rho"], self._scratch)
+        return self._scratch
 
 
 class _Coupling(Term):
@@ -513,6 +567,7 @@ class _Coupling(Term):
     def __init__(self, settings: SeepageSettings):
         super().__init__()
         self.settings = settings
+        self.volumes = RowVolumes()
         self.reads = ("x", "v", "rho", "mass", "material") + (("pore_pressure",) if settings.mixture else ())
         if settings.corrected:
             self.fields = {"pair_correction": PAIR_CORRECTION}
@@ -586,8 +641,10 @@ class SeepageOnWater(_Coupling):
     def run(self, ctx):
         ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
         mix = st.mixture
+        start, index = nl.unsigned()
+        vol = self.volumes(ps)
         ctx.shared["seepage water rate"] = seepage_on_water(
-            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            nl.targets, start, index, ps["x"], ps["v"], ps["rho"], ps["mass"], vol, ps["material"], st.drag,
             st.solid, st.grain_density, ctx.h, ctx.norm, ps["acc"], ps["drho"] if mix else None,
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
             ps["fixed"] if st.walls else None, st.one_soil, True if st.linear and mix else None,
@@ -622,8 +679,10 @@ class SeepageOnSoil(_Coupling):
 
     def run(self, ctx):
         ps, nl, st = ctx.particles, ctx.neighbours(self), self.settings
+        start, index = nl.unsigned()
+        vol = self.volumes(ps)
         self.lam = seepage_on_soil(
-            nl.targets, nl.start, nl.index, ps["x"], ps["v"], ps["rho"], ps["mass"], ps["material"], st.drag,
+            nl.targets, start, index, ps["x"], ps["v"], ps["rho"], ps["mass"], vol, ps["material"], st.drag,
             st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if st.mixture else None, ctx.is3d,
             ps["fixed"] if st.walls else None, ps["pair_correction"] if st.corrected else None,
         )  # fmt: skip
