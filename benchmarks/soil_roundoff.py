@@ -109,7 +109,7 @@ np.savez(out, x=ps["x"][:n][order], sigma=sigma[order][soil], rho=ps["rho"][:n][
 """
 
 
-def run(root, case, steps, resolution, nudge, folder, formulation="mixture", n_soil=2000):
+def run(root, case, steps, resolution, nudge, folder, formulation="mixture", n_soil=2500):
     out = os.path.join(folder, f"{len(os.listdir(folder))}.npz")
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     args = [sys.executable, "-c", CHILD, os.path.abspath(root), case, str(steps), str(resolution), nudge, out]
@@ -144,7 +144,12 @@ def main(argv=None):
     ap.add_argument(
         "--formulation", choices=("mixture", "seed"), default="mixture", help="saturated: seepage"
     )
-    ap.add_argument("--soil", type=int, default=2000, help="saturated: soil particles")
+    ap.add_argument(
+        "--soil",
+        type=int,
+        default=2500,
+        help="saturated: soil particles (2000 blows up on main too: jitter within dx/2 of x_max)",
+    )
     ap.add_argument("--factor", type=float, default=10.0, help="new-old may be this many times the bound")
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
