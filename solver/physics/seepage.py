@@ -37,9 +37,11 @@ rho_s)); dt <= cfl.drag / lambda_max (numerics.cfl.drag), evaluated every step f
 Three passes, one loop over the pairs each (docs/seepage.md, "Speed"): p~ at the soil (Shepard,
 state stage); the water side, which interpolates p^ back onto the water and sums its pair forces
 and Biot's storage in the same loop (the buoyancy sums split around p^_a, which is not known
-until the loop ends); the soil side, pair by pair. p~ and p^ are refreshed on ghosts and images
-in between (the plan derives it from what each term reads and writes). Per-row gathering needs no
-atomics and serves ghost and image neighbours as they are.
+until the loop ends); the soil side, pair by pair, reading the pairs' V W and V W'/r that the p~
+pass left over the same list (mixture; the seed form computes them). p~ and p^ are refreshed on
+ghosts and images in between (the plan derives it from what each term reads and writes). Per-row
+gathering needs no atomics and serves ghost and image neighbours as they are; rows are split over
+threads in chunks of equal work (row_chunks).
 """
 
 from __future__ import annotations
