@@ -11,6 +11,14 @@ seepage bed of bench_seepage_step.py: dry (soil only), saturated (the whole step
 seepage terms alone, run on the saturated state; time per call of all of them). CPU time rather
 than wall time, and the two builds alternated, because this 2-core host's speed varies 2x within
 an hour: the ratio new/old of one round is the figure to quote, with the load printed beside it.
+
+    python benchmarks/ab_step.py OLD NEW --kind coupling --call-by-call --pairs 3 --calls 200
+
+--call-by-call: the two builds in two long-lived processes pinned to one core (--cpu), taking
+turns call by call (one timed call of the old build, one of the new, a few milliseconds apart, as
+benchmarks/reference_build.py does for the gate): both see the same core in the same state, which
+process-by-process rounds do not (a vCPU's speed changes from minute to minute). Per process pair
+the median of the calls' new/old ratios; one Numba thread, CPU time.
 """
 
 from __future__ import annotations
@@ -20,9 +28,13 @@ import os
 import subprocess
 import sys
 
-CHILD = """
-import sys, time
+import numpy as np
+
+SETUP = """
+import os, sys, time
 root, kind, scheme, threads = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+if len(sys.argv) > 5:
+    os.sched_setaffinity(0, {int(sys.argv[5])})
 sys.path[:0] = [root, root + "/benchmarks"]
 import numba
 numba.set_num_threads(threads)
@@ -44,6 +56,11 @@ if kind == "coupling":  # the names of the seepage terms in every version of the
             t.run(sim.ctx)
 for _ in range(3):
     step()
+"""
+
+CHILD = (
+    SETUP
+    + """
 clock = time.process_time if threads == 1 else time.perf_counter  # OpenMP threads spin: wall time
 blocks = []
 for _ in range(15):
@@ -53,6 +70,52 @@ for _ in range(15):
     blocks.append((clock() - t0) / 5)
 print(min(blocks), sim.particles.n_owned)
 """
+)
+
+
+CALLS = (
+    SETUP
+    + """
+print("ready", flush=True)
+for line in sys.stdin:
+    c0 = time.process_time()
+    step()
+    print(time.process_time() - c0, flush=True)
+"""
+)
+
+
+def call_by_call(old, new, kind, scheme_old, scheme_new, cpu, calls):
+    """Median new/old of `calls` alternating calls, both builds' processes pinned to `cpu`."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", CALLS, os.path.abspath(root), kind, scheme or "-", "1", str(cpu)],
+            env=env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            bufsize=1,
+        )  # fmt: skip
+        for root, scheme in ((old, scheme_old), (new, scheme_new))
+    ]
+    try:
+        for p in procs:
+            if p.stdout.readline().strip() != "ready":
+                raise SystemExit(f"a {kind} child did not start")
+        times = []
+        for _ in range(calls):
+            pair = []
+            for p in procs:
+                p.stdin.write("go\n")
+                pair.append(float(p.stdout.readline()))
+            times.append(pair)
+    finally:
+        for p in procs:
+            p.stdin.close()
+            p.wait()
+    t = np.array(times)
+    return float(np.median(t[:, 1] / t[:, 0])), float(np.median(t[:, 0])), float(np.median(t[:, 1]))
 
 
 def step_time(root, kind, scheme=None, threads=1):
@@ -81,7 +144,22 @@ def main(argv=None):
             f"--{side}-scheme",
             help=f'water only: numerics.scheme of the {side} run ("seed", "default"); default: the scene\'s',
         )
+    ap.add_argument("--call-by-call", action="store_true", help="alternate call by call on one core (--cpu)")
+    ap.add_argument("--cpu", type=int, default=1, help="--call-by-call: the core both processes run on")
+    ap.add_argument("--pairs", type=int, default=3, help="--call-by-call: process pairs")
+    ap.add_argument("--calls", type=int, default=200, help="--call-by-call: alternating calls per pair")
     args = ap.parse_args(argv)
+    if args.call_by_call:
+        for k in range(args.pairs):
+            ratio, t_old, t_new = call_by_call(
+                args.old, args.new, args.kind, args.old_scheme, args.new_scheme, args.cpu, args.calls
+            )
+            print(
+                f"pair {k + 1}: {args.kind}, {args.calls} calls each on cpu {args.cpu}, median old "
+                f"{t_old * 1e3:.2f} ms, new {t_new * 1e3:.2f} ms, median new/old {ratio:.3f}, "
+                f"load {os.getloadavg()[0]:.1f}"
+            )
+        return
     for k in range(args.rounds):
         (t_old, n) = step_time(args.old, args.kind, args.old_scheme, args.threads)
         (t_new, _) = step_time(args.new, args.kind, args.new_scheme, args.threads)

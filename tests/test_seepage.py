@@ -14,6 +14,7 @@ from solver.neighbors import CellGrid, CellList
 from solver.physics.seepage import (
     lattice_gradient_normalisation,
     pore_pressure_at_soil,
+    row_chunks,
     seepage_on_soil,
     seepage_on_water,
 )
@@ -55,34 +56,50 @@ def two_phase(rng, dim=2, n_side=10, dx=0.01):
     )  # fmt: skip
 
 
-def _pore(s):
+def _chunks(nl, n_chunks):
+    """Row chunks as on n_chunks threads (always an array: chunks=None would be one more compiled variant)."""
+    return row_chunks(nl.unsigned()[0], n_chunks)
+
+
+def _pore(s, chunks=3, pairs=False):
+    """p~ on the soil rows; with pairs, also the per-pair V W and V W'/r the pass leaves for the soil side."""
     pore = np.zeros(len(s["x"]))
     nl = s["on_soil"]
+    vw, vf = (np.full(nl.pairs(), np.nan) for _ in range(2))
     pore_pressure_at_soil(
-        nl.targets, nl.start, nl.index, s["x"], s["rho"], s["mass"], s["p"], s["h"], s["norm"], pore,
-        True if s["dim"] == 3 else None,
+        nl.targets, *nl.unsigned(), s["x"], s["mass"] / s["rho"], s["p"], s["h"], s["norm"], pore,
+        True if s["dim"] == 3 else None, _chunks(nl, chunks), vw, vf,
     )  # fmt: skip
-    return pore
+    return (pore, vw, vf) if pairs else pore
 
 
-def _rates(s, mixture=True, storage=True, wall=None, one_soil=None, linear=None, kappa=0.0):
+def _rates(
+    s, mixture=True, storage=True, wall=None, one_soil=None, linear=None, kappa=0.0, chunks=3, cached=True
+):
     """Both sides in the solver's order: p~ at the soil, the water side (which writes p^ on the
-    water rows in the mixture form), then the soil side. Returns acc, drho, the two relaxation
-    rates and the pore pressure field (p~ on soil rows, p^ on water rows)."""
+    water rows in the mixture form), then the soil side; each pass in `chunks` chunks of rows (as
+    on that many threads) and, with cached, the soil side reading the pairs' V W and V W'/r of the p~
+    pass (mixture), as the solver does. Returns acc, drho, the two relaxation rates and the pore
+    pressure field (p~ on soil rows, p^ on water rows)."""
     n, dim = len(s["x"]), s["dim"]
     acc, drho = np.zeros((n, dim)), np.zeros(n)
-    pore = _pore(s) if mixture else None
+    pore, vw, vf = _pore(s, chunks, pairs=True) if mixture else (None, None, None)
+    if not cached:
+        vw = vf = None
     is3d = True if dim == 3 else None
     solid = s["solid"] if mixture else np.zeros(3)
     corr = np.zeros((n, 6)) if kappa > 0 else None
+    vol = s["mass"] / s["rho"]
     lam_w = seepage_on_water(
-        s["on_water"].targets, s["on_water"].start, s["on_water"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["on_water"].targets, *s["on_water"].unsigned(), s["x"], s["v"], s["rho"], s["mass"], vol,
         s["material"], s["drag"], solid, s["grain"], s["h"], s["norm"], acc, drho if storage else None,
         s["p"] if mixture else None, pore, is3d, wall, one_soil, linear, corr, kappa,
+        _chunks(s["on_water"], chunks),
     )  # fmt: skip
     lam_s = seepage_on_soil(
-        s["on_soil"].targets, s["on_soil"].start, s["on_soil"].index, s["x"], s["v"], s["rho"], s["mass"],
+        s["on_soil"].targets, *s["on_soil"].unsigned(), s["x"], s["v"], s["rho"], s["mass"], vol,
         s["material"], s["drag"], solid, s["h"], s["norm"], acc, pore, is3d, wall, corr,
+        _chunks(s["on_soil"], chunks), vw, vf,
     )  # fmt: skip
     if kappa > 0:
         s["corr"] = corr
@@ -263,6 +280,35 @@ def test_pair_forces_are_equal_and_opposite(rng, mixture):
     momentum_rate = (s["mass"][:, None] * acc).sum(axis=0)
     scale = (s["mass"][:, None] * np.abs(acc)).sum()
     assert np.abs(momentum_rate).max() <= 1e-14 * scale
+
+
+def test_row_chunks_split_the_work_evenly():
+    """row_chunks: contiguous chunks covering every row once, each within one row's work (pairs + 1)
+    of an even share, also when a third of the rows have no pairs (water above a bed)."""
+    rng = np.random.default_rng(3)
+    counts = np.concatenate([rng.integers(10, 30, 700), np.zeros(300, np.int64)])
+    start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    for n_chunks in (1, 2, 3, 8):
+        bounds = row_chunks(start.view(np.uint64), n_chunks)
+        assert bounds[0] == 0 and bounds[-1] == len(counts) and (np.diff(bounds) >= 0).all()
+        work = np.array([start[hi] - start[lo] + hi - lo for lo, hi in zip(bounds[:-1], bounds[1:])])
+        assert np.abs(work - work.sum() / n_chunks).max() <= counts.max() + 1
+
+
+def test_chunks_and_the_soil_sides_pair_cache_change_nothing(rng):
+    """The pair loops' results do not depend on how the rows are chunked over threads (each row's
+    sums are the same, bit for bit), and the soil side reading V W and V W'/r from the p~ pass
+    equals it computing them (the same expressions, compiled in two loops: round-off)."""
+    s = two_phase(rng)
+    kappa = KAPPA[2]
+    one = _rates(s, kappa=kappa, chunks=1)
+    for chunks in (2, 5):
+        other = _rates(s, kappa=kappa, chunks=chunks)
+        for a, b in zip(one, other):
+            np.testing.assert_array_equal(a, b)
+    computed = _rates(s, kappa=kappa, cached=False)
+    for a, b in zip(one, computed):
+        np.testing.assert_allclose(b, a, rtol=1e-13, atol=1e-14 * np.abs(a).max())
 
 
 KAPPA = {2: lattice_gradient_normalisation(2, 1.3), 3: lattice_gradient_normalisation(3, 1.3)}
