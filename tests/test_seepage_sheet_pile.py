@@ -65,6 +65,45 @@ def test_the_case_runs_the_corrected_pore_pressure_and_a_skeleton_in_the_pile():
     assert next(t for t in default.terms if t.name == "fluid rates").pore is None
 
 
+def test_pile_normals_face_the_nearest_face_and_vanish_above_the_ground():
+    """The pile's outward normals (PileWallPressure's mirror): +-x on its sides, -y on its tip, the
+    bisector at the tip's corners, none above the ground (the ponds keep a wall at rest)."""
+    dx = 0.01
+    xs = sp.HALF + np.array([-1.5, -0.5, 0.5, 1.5]) * dx
+    pts = np.array([[x, y] for y in (0.105, 0.115, 0.135, 0.205) for x in xs])
+    n = sp.pile_normals(pts).reshape(4, 4, 2)
+    r = np.sqrt(0.5)
+    np.testing.assert_allclose(n[0], [[-r, -r], [0, -1], [0, -1], [r, -r]])  # the tip's row
+    np.testing.assert_allclose(n[1], [[-1, 0], [-r, -r], [r, -r], [1, 0]])  # equidistant: bisector
+    np.testing.assert_allclose(n[2], [[-1, 0], [-1, 0], [1, 0], [1, 0]])
+    np.testing.assert_allclose(n[3], 0.0)  # above the ground
+
+
+def test_pile_wall_mirrors_the_pore_water_velocity_across_its_faces():
+    """Pore water moving uniformly at (u, w): the pile's particles below the ground get (-u, w) on
+    the sides and (u, -w) on the tip (the free-slip image velocity), those above it stay at rest, and
+    their velocity does not move them (the leap-frog's v_half is set too, their positions reset)."""
+    from solver.simulation import Simulation
+
+    sim = Simulation(sp.scene(20, 0.1))
+    ps = sim.particles
+    n = ps.n_owned
+    water = np.flatnonzero(ps["material"][:n] == sim.plan.materials.names.index("water"))
+    pore = water[~ps["fixed"][water]]
+    ps["v"][pore] = ps["v_half"][pore] = [1e-3, 2e-3]
+    hook = sp.PileWallPressure(sim)
+    wall = hook.inverse[hook.wall_id]
+    x, v = ps["x"][wall], ps["v"][wall]
+    side = (np.abs(np.abs(x[:, 0] - sp.HALF) - 0.015) < 1e-9) & (x[:, 1] > 0.125) & (x[:, 1] < 0.17)
+    tip = (np.abs(x[:, 0] - sp.HALF) < 0.01) & (x[:, 1] < 0.11)
+    np.testing.assert_allclose(v[side], np.tile([-1e-3, 2e-3], (side.sum(), 1)), rtol=1e-12)
+    np.testing.assert_allclose(v[tip], np.tile([1e-3, -2e-3], (tip.sum(), 1)), rtol=1e-12)
+    assert np.all(v[x[:, 1] > sp.T] == 0.0) and np.array_equal(ps["v_half"][wall], v)
+    ps["x"][wall] += 1e-7  # a step's drift
+    hook(sim)
+    np.testing.assert_array_equal(ps["x"][wall], x)
+
+
 def test_a_bad_pore_pressure_gradient_is_refused_naming_the_key():
     from solver.errors import SceneError
 

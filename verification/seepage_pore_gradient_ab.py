@@ -1,0 +1,112 @@
+"""The seepage cases with and without the corrected pore-pressure gradient (issue 10; docs/seepage.md,
+"The pore water's own pressure force"): should `numerics.pore_pressure_gradient = "corrected"` become
+the default? Each case's own `run(RESOLUTION)` (its checks, its tolerances) once with
+pore_pressure_gradient = "symmetric" and once with "corrected", set on every scene the case builds
+(seepage_common.scene's numerics); the sheet pile is left out (it sets "corrected" itself).
+
+    NUMBA_NUM_THREADS=1 python -m verification.seepage_pore_gradient_ab CASE|all SETTING [RESOLUTION]
+
+runs one case (or all four, one after the other) with one setting in this process (the CPU times are
+each case's own timing of its stepping, compiles excluded) and writes
+results/seepage_pore_gradient/CASE_SETTING.json; `--table` writes the table of every JSON there
+(pore_gradient_ab.md)."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import sys
+
+from . import seepage_common as sc
+from .common import RESULTS
+
+OUT = RESULTS / "seepage_pore_gradient"
+CASES = {  # the CI sizes (tests/test_seepage_verification.py), each the case's own run()
+    "seepage_bed_at_rest": 10,
+    "seepage_darcy": 10,
+    "seepage_terzaghi": 10,
+    "seepage_critical_gradient": 12,
+}
+SETTINGS = ("symmetric", "corrected")
+
+
+def cpu_of(runs):
+    """Summed CPU seconds of a case's runs (dicts with "cpu", possibly nested in lists/dicts)."""
+    if isinstance(runs, dict):
+        return runs["cpu"] if "cpu" in runs else sum(cpu_of(r) for r in runs.values())
+    if isinstance(runs, (list, tuple)):
+        return sum(cpu_of(r) for r in runs)
+    return 0.0
+
+
+def run_case(case, setting, resolution=None):
+    original = sc.scene
+
+    def scene(*args, **numerics):
+        numerics.setdefault("pore_pressure_gradient", setting)
+        return original(*args, **numerics)
+
+    sc.scene = scene
+    try:
+        module = importlib.import_module(f"verification.{case}")
+        res = module.run(resolution or CASES[case])
+    finally:
+        sc.scene = original
+    out = {
+        "case": case, "setting": setting, "resolution": res.resolution, "cpu_s": cpu_of(res.series),
+        "wall_s": res.wall_time, "load": round(os.getloadavg()[0], 2),
+        "threads": os.environ.get("NUMBA_NUM_THREADS", "default"),
+        "blow_ups": [n for n in res.notes if "BLEW UP" in n],
+        "checks": [{"metric": c.metric, "value": float(c.value), "tolerance": float(c.tolerance),
+                    "passed": bool(c.passed)} for c in res.checks],
+    }  # fmt: skip
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / f"{case}_{setting}.json").write_text(json.dumps(out, indent=1))
+    return out
+
+
+def table():
+    lines = [
+        "| case (resolution) | check | tolerance | symmetric | corrected | change |",
+        "|---|---|---|---|---|---|",
+    ]
+    cpu = ["", "| case | CPU symmetric (s) | CPU corrected (s) | ratio | load |", "|---|---|---|---|---|"]
+    for case in CASES:
+        runs = {}
+        for s in SETTINGS:
+            path = OUT / f"{case}_{s}.json"
+            if path.exists():
+                runs[s] = json.loads(path.read_text())
+        if len(runs) < 2:
+            continue
+        sym, cor = runs["symmetric"], runs["corrected"]
+        by = {c["metric"]: c for c in cor["checks"]}
+        for c in sym["checks"]:
+            d = by.get(c["metric"])
+            if d is None:
+                continue
+            mark = lambda x: f"{x['value']:+.4g}" + ("" if x["passed"] else " FAIL")  # noqa: E731
+            change = abs(d["value"]) - abs(c["value"])
+            head = f"| {case} ({sym['resolution']}) | {c['metric']} | {c['tolerance']:.4g}"
+            lines.append(f"{head} | {mark(c)} | {mark(d)} | {change:+.2g} |")
+        for r in (sym, cor):
+            if r["checks"] and all(c["value"] != c["value"] for c in r["checks"]):  # all NaN
+                blew = "; ".join(r.get("blow_ups", [])) or "every run raised BlowUpError (cpu 0, no gradient)"
+                lines.append(f"| {case} ({r['resolution']}) | {r['setting']}: BLEW UP | | | | {blew} |")
+        ratio = cor["cpu_s"] / sym["cpu_s"] if cor["cpu_s"] else float("nan")
+        load = f"{sym['load']}; {cor['load']}"
+        cpu.append(f"| {case} | {sym['cpu_s']:.1f} | {cor['cpu_s']:.1f} | {ratio:.2f} | {load} |")
+    text = "\n".join(lines + cpu) + "\n"
+    (OUT / "pore_gradient_ab.md").write_text(text)
+    return text
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "--table":
+        print(table())
+    else:
+        cases = list(CASES) if sys.argv[1] == "all" else [sys.argv[1]]
+        for case in cases:
+            r = run_case(case, sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else None)
+            print(json.dumps(r, indent=1), flush=True)
