@@ -856,19 +856,20 @@ def _plot_resolution(plt, cases, path):
     fine = [c for c in cases if c["dx"] == DX_FINE]
     if not fine:
         return
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for c in fine:
-        coarse = next(
-            (k for k in cases if k["dx"] == DX and k["soil"] == c["soil"] and k["q"] == c["q"]
-             and k["length"] == c["length"]), None)  # fmt: skip
-        (line,) = ax.plot(c["t"], 1000 * c["d"], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
-        if coarse is not None:
-            ax.plot(coarse["t"], 1000 * coarse["d"], "--", color=line.get_color(), label="same, 5 mm")
-    ax.set_xlim(0.0, 1.25 * max(c["t_reached"] for c in fine))  # where both resolutions have data
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("scour depth d (mm)")
-    ax.set_title("resolution: 5 mm against 2.5 mm")
-    ax.legend(fontsize=8)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    for ax, key, what in zip(axes, ("d", "d_nappe"), ("whole-layer d", f"d_nappe (x ≤ L − {WALL_ZONE:g} m)")):
+        for c in fine:
+            coarse = next(
+                (k for k in cases if k["dx"] == DX and k["soil"] == c["soil"] and k["q"] == c["q"]
+                 and k["length"] == c["length"]), None)  # fmt: skip
+            (line,) = ax.plot(c["t"], 1000 * c[key], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
+            if coarse is not None:
+                ax.plot(coarse["t"], 1000 * coarse[key], "--", color=line.get_color(), label="same, 5 mm")
+        ax.set_xlim(0.0, 1.05 * max(c["t_reached"] for c in fine))  # where both resolutions have data
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(f"{what} (mm)")
+        ax.set_title(f"resolution, {what}: 5 mm against 2.5 mm", fontsize=9)
+        ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
