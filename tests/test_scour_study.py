@@ -84,11 +84,14 @@ def test_the_nappe_zone_leaves_out_the_end_wall_trough(tmp_path):
     z = np.full((50, 3), 0.095)
     z[14, 1:] -= 0.0003  # the nappe's dent at x = 0.0725 m
     z[44, 2] -= 0.005  # the end wall's trough at x = 0.2225 m (0.0275 m before the wall)
-    d, xs = sz.zone_series(x, t, z)
+    z[3, 2] -= 0.0004  # a dip beside the caisson's face at x = 0.0175 m (the face zone)
+    d, xs, d_face = sz.zone_series(x, t, z)
     assert d == pytest.approx([0.0, 0.0003, 0.0003])
     assert xs[2] == pytest.approx(0.0725)
+    assert d_face == pytest.approx([0.0, 0.0, 0.0004])
     assert sz.whole_layer_depth(z)[2] == pytest.approx(0.005)
-    assert x[x <= 0.25 - sz.WALL_ZONE + 1e-12].max() == pytest.approx(0.1475)  # zone: x <= 0.15 m
+    zone = x[(x >= sz.FACE_ZONE) & (x <= 0.25 - sz.WALL_ZONE + 1e-12)]
+    assert zone.min() == pytest.approx(0.0325) and zone.max() == pytest.approx(0.1475)  # 0.03-0.15 m
     assert not sz.at_zone_edge(xs, 0.25, 0.005).any()
     # the study's copy gains the zone columns; another run's profiles are refused
     prof, copy = tmp_path / "p.csv", tmp_path / "c_scour.csv"
@@ -96,7 +99,8 @@ def test_the_nappe_zone_leaves_out_the_end_wall_trough(tmp_path):
     copy.write_text("t_s,depth_m\n0,0\n1,0.0003\n2,0.005\n")
     sz.add_zone_columns(copy, prof)
     rows = copy.read_text().splitlines()
-    assert rows[0] == "t_s,depth_m,depth_nappe_m,x_deepest_nappe_m" and rows[3].startswith("2,0.005,0.0003,")
+    assert rows[0] == "t_s,depth_m,depth_nappe_m,x_deepest_nappe_m,depth_face_m"
+    assert rows[3].startswith("2,0.005,0.0003,0.0725,0.0004")
     copy.write_text("t_s,depth_m\n0,0\n1,0.0003\n2,0.0051\n")
     with pytest.raises(ValueError, match="another run"):
         sz.add_zone_columns(copy, prof)

@@ -25,6 +25,7 @@ image from behind its mirror line. Three looks:
     python -m verification.scour_face_dip images saturated_q0.09_dx5mm
     python -m verification.scour_face_dip near saturated_q0.09_dx5mm --from 0.5 --to 2.0
     nice -n 10 python -m verification.scour_face_dip pond --end 1.0      # runs/scour_face_dip/pond_dx5mm
+    nice -n 10 python -m verification.scour_face_dip pond --end 0.1 --without no_corner_images   # experiment
     python -m verification.scour_face_dip compare saturated_q0.09_dx5mm --at 1.0
 
 Each command prints its table and writes it as JSON to verification/results/scour/face_dip/.
@@ -207,14 +208,38 @@ def pond_raw(dx=0.005, end_time=1.0):
     return raw
 
 
-def pond(dx=0.005, end_time=1.0):
+VARIANTS = ("no_corner_images", "no_pruning")  # experiment-only switches of the body images (below)
+
+
+def _switch_off(variant):
+    """Experiment only (not a solver option): the pond with one part of the body images removed, to
+    see which part drives the current at the corners. no_corner_images: no image through a convex
+    vertex (BodyGeometry's corner table emptied); no_pruning: every image pair kept
+    (BodyImages.prune a no-op)."""
+    from solver.physics import bodies
+
+    if variant == "no_corner_images":
+        init = bodies.BodyGeometry.__init__
+
+        def without_corners(self, scene):
+            init(self, scene)
+            self.corner, self.t_in, self.t_out = (np.zeros((0, 2)) for _ in range(3))
+
+        bodies.BodyGeometry.__init__ = without_corners
+    elif variant == "no_pruning":
+        bodies.BodyImages.prune = lambda self, particles, lists, first: lists
+
+
+def pond(dx=0.005, end_time=1.0, variant=None):
     import os
     import resource
 
     from solver.run import run_scene
     from solver.scene import parse_scene
 
-    out = POND_RUNS / f"pond_dx{dx * 1000:g}mm"
+    if variant:
+        _switch_off(variant)
+    out = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else ""))
     load0 = os.getloadavg()[0]
     c0, w0 = time.process_time(), time.perf_counter()
     run_scene(parse_scene(pond_raw(dx, end_time), SCENES / "scour_saturated.toml"), out, quiet=True,
@@ -222,6 +247,8 @@ def pond(dx=0.005, end_time=1.0):
     report = json.loads((out / "run.json").read_text())
     return {
         "run": str(out.relative_to(ROOT)),
+        "variant": variant,
+        "water_speed_near_corners": corner_currents(out),
         "t_reached": report["simulated_time_s"],
         "status": report["status"],
         "cpu_s": time.process_time() - c0,
@@ -233,6 +260,27 @@ def pond(dx=0.005, end_time=1.0):
         "particles": report["particles"],
         "steps": report["steps"],
     }
+
+
+CORNERS = {"caisson's landward corner": (0.0, CROWN), "end wall's upstream corner": (0.25, SURFACE),
+           "mid-pond (control)": (0.12, 0.15)}  # fmt: skip
+
+
+def corner_currents(run, radius=0.015):
+    """Max and mean water speed within `radius` of each of CORNERS at every output time of a run
+    (in a still pond every water particle should stay at rest)."""
+    from solver.output.hdf5_writer import read_series
+
+    out = {}
+    for t, f in read_series(Path(run) / "particles.h5"):
+        w = f["material"] == WATER
+        x, sp = f["position"][w], np.hypot(*f["velocity"][w].T)
+        row = {}
+        for name, c in CORNERS.items():
+            k = np.hypot(x[:, 0] - c[0], x[:, 1] - c[1]) < radius
+            row[name] = [round(float(sp[k].max()), 4), round(float(sp[k].mean()), 4)] if k.any() else None
+        out[f"{t:g}"] = row
+    return out
 
 
 def _profile_at(run, t):
@@ -292,6 +340,7 @@ def main(argv=None):
     c = sub.add_parser("pond")
     c.add_argument("--end", type=float, default=1.0)
     c.add_argument("--dx", type=float, default=0.005)
+    c.add_argument("--without", choices=VARIANTS, help="experiment: switch this part of the body images off")
     d = sub.add_parser("compare")
     d.add_argument("case")
     d.add_argument("--at", type=float, default=1.0)
@@ -301,7 +350,8 @@ def main(argv=None):
     elif args.cmd == "near":
         _write(f"near_{args.case}", near(args.case, args.t_from, args.t_to))
     elif args.cmd == "pond":
-        _write(f"pond_dx{args.dx * 1000:g}mm", pond(args.dx, args.end))
+        tag = f"pond_dx{args.dx * 1000:g}mm" + (f"_{args.without}" if args.without else "")
+        _write(tag, pond(args.dx, args.end, args.without))
     elif args.cmd == "compare":
         _write(f"compare_{args.case}_pond_{args.at:g}s", compare(args.case, args.at))
     return 0

@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from verification.scour_zones import WALL_ZONE
+from verification.scour_zones import FACE_ZONE, WALL_ZONE
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "solver" / "scenes"
@@ -309,8 +309,13 @@ def load_case(path):
     c["eroded"] = np.array([float(r["eroded_area_m2"]) for r in rows])
     # the nappe-zone depth (verification/scour_zones.py); nan where the copy has no zone columns
     zoned = bool(rows) and "depth_nappe_m" in rows[0]
-    for key, col in (("d_nappe", "depth_nappe_m"), ("x_nappe", "x_deepest_nappe_m")):
-        c[key] = np.array([float(r[col]) for r in rows]) if zoned else np.full(len(rows), np.nan)
+    for key, col in (
+        ("d_nappe", "depth_nappe_m"),
+        ("x_nappe", "x_deepest_nappe_m"),
+        ("d_face", "depth_face_m"),
+    ):
+        ok = zoned and col in rows[0]
+        c[key] = np.array([float(r[col]) for r in rows]) if ok else np.full(len(rows), np.nan)
     return c
 
 
@@ -453,7 +458,8 @@ def report(out=RESULTS):
     fields += [f"d_{t:g}s_mm" for t in fixed]
     fields += ["d_end_mm", "d_change_last_0.5s_pct", "x_deepest_end_m", "eroded_end_cm2"]
     fields += [f"d_nappe_{t:g}s_mm" for t in fixed]
-    fields += ["d_nappe_end_mm", "d_nappe_change_last_0.5s_pct", "x_deepest_nappe_end_m", "body_leaks"]
+    fields += ["d_nappe_end_mm", "d_nappe_change_last_0.5s_pct", "x_deepest_nappe_end_m", "d_face_end_mm"]
+    fields += ["body_leaks"]
     fields += ["balance_residual_particles", "steps", "particles_end", "wall_s", "cpu_s", "load_start"]
     fields += ["load_end", "threads", "solver"]
     rows = []
@@ -482,6 +488,7 @@ def report(out=RESULTS):
         change = steady_change(c, key="d_nappe")
         row["d_nappe_change_last_0.5s_pct"] = f"{100 * change:.0f}" if np.isfinite(change) else ""
         row["x_deepest_nappe_end_m"] = f"{c['x_nappe'][-1]:.3f}" if zoned else ""
+        row["d_face_end_mm"] = f"{1000 * c['d_face'][-1]:.2f}" if zoned else ""
         row["body_leaks"] = c.get("body_leaks")
         row["balance_residual_particles"] = f"{residual(c):.2g}"
         row["steps"] = c["steps"]
@@ -509,10 +516,10 @@ def report(out=RESULTS):
         "d_change_last_0.5s_pct: |d(end) - d(end - 0.5 s)| / d(end); the issue's \"the hole stops",
         'deepening" is < 2. solver: the commit the run was made at (a continued run: its last',
         "segment's; empty: made before the commit was recorded, before 2026-12-01 19:30 on branch scour3).",
-        "d_nappe: the same depth over the nappe zone only, from the caisson's face to WALL_ZONE = "
-        f"{WALL_ZONE:g} m",
-        "before the end wall (verification/scour_zones.py says why), x_deepest_nappe where it is reached;",
-        "empty for a run whose profiles were not kept.",
+        f"d_nappe: the same depth over the nappe zone only, from FACE_ZONE = {FACE_ZONE:g} m beside the",
+        f"caisson's face to WALL_ZONE = {WALL_ZONE:g} m before the end wall (scour_zones.py says",
+        "why), x_deepest_nappe where it is reached; d_face: the deepest drop within FACE_ZONE of the",
+        "caisson's face (the bodies' corner artefact); empty for a run whose profiles were not kept.",
         "",
         "| " + " | ".join(fields) + " |",
         "|" + "---|" * len(fields),
@@ -576,8 +583,8 @@ def _nappe_zone_section(cases):
         return []
     lines = ["", "## The nappe-zone depth (d_nappe; verification/scour_zones.py)", ""]
     lines += [
-        f"d_nappe: the deepest drop from the caisson's face to {WALL_ZONE:g} m before the end wall"
-        " (x ≤ 0.15 m in the 0.25 m layer); the whole-layer d beside it.",
+        f"d_nappe: the deepest drop from {FACE_ZONE:g} m beside the caisson's face to {WALL_ZONE:g} m before"
+        " the end wall (0.03 ≤ x ≤ 0.15 m in the 0.25 m layer); the whole-layer d beside it.",
         "",
         "| soil | dx (mm) | time (s) | q values | d_nappe (mm) | exponent of q (d_nappe) | d (mm) "
         "| exponent of q (d) |",
@@ -812,7 +819,8 @@ def _plot_nappe_depth(plt, cases, path):
             ax.plot(c["t"], 1000 * c["d_nappe"], "-", color=colour, label=f"q = {c['q']:.2f} m²/s")
             ax.plot(c["t"], 1000 * c["d"], ":", color=colour, lw=0.9)
         ax.set_ylim(0.0, 1.6)
-        ax.set_title(f"{soil}, 5 mm: d_nappe (x ≤ L − {WALL_ZONE:g} m), dotted: whole-layer d", fontsize=9)
+        zone = f"{FACE_ZONE:g} ≤ x ≤ L − {WALL_ZONE:g} m"
+        ax.set_title(f"{soil}, 5 mm: d_nappe ({zone}), dotted: whole-layer d", fontsize=9)
         ax.set_xlabel("t (s)")
         ax.legend(fontsize=8)
     axes[0].set_ylabel("scour depth (mm); d clipped at 1.6 mm")
@@ -857,7 +865,8 @@ def _plot_resolution(plt, cases, path):
     if not fine:
         return
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-    for ax, key, what in zip(axes, ("d", "d_nappe"), ("whole-layer d", f"d_nappe (x ≤ L − {WALL_ZONE:g} m)")):
+    nappe = f"d_nappe ({FACE_ZONE:g} ≤ x ≤ L − {WALL_ZONE:g} m)"
+    for ax, key, what in zip(axes, ("d", "d_nappe"), ("whole-layer d", nappe)):
         for c in fine:
             coarse = next(
                 (k for k in cases if k["dx"] == DX and k["soil"] == c["soil"] and k["q"] == c["q"]

@@ -12,22 +12,30 @@ upstream of it (saturated runs; at q = 0.11 the mound leaves over the wall). In 
 (docs/scour_long_layer.md) the trough sits at the same distance from the far wall, so it is the
 wall's, not the nappe's.
 
-The rule. d_nappe(t) = max(0, max over bins with centre x <= L - WALL_ZONE of (z_s0 - z_s)), x
-measured from the caisson's face (the layer's upstream end, x = 0) and L the layer's length (the
-end wall's face), and x_nappe where it is reached. WALL_ZONE = 0.10 m: in every 5 mm saturated run
+The rule. d_nappe(t) = max(0, max over bins with centre FACE_ZONE <= x <= L - WALL_ZONE of
+(z_s0 - z_s)), x measured from the caisson's face (the layer's upstream end, x = 0) and L the
+layer's length (the end wall's face), and x_nappe where it is reached; d_face(t), the same over
+x < FACE_ZONE, is kept beside it. WALL_ZONE = 0.10 m: in every 5 mm saturated run
 of the study (0.25 m layer, q = 0.06-0.11, to 2-2.5 s) and in the 0.60 m layer, the surface change
 after 0.5 s next to the end wall (trough and mound, |change| > 0.1 mm) reaches 0.065-0.080 m
 upstream of the wall by 2 s at q <= 0.10 and in the 0.60 m layer, and 0.095 m at q = 0.11 in the
 0.25 m layer (its hole widens upstream after the break-through); 0.10 m covers all of them. In the
-0.25 m layer the nappe zone is then x <= 0.15 m: it holds the nappe's landing (x = 0.06-0.10 m on
+0.25 m layer the nappe zone is then 0.03 <= x <= 0.15 m: it holds the nappe's landing (x = 0.06-0.10 m on
 the rigid bed, docs/scour_setup.md sec. 6) and its first-impact dent (x = 0.03-0.13 m), and it is
 docs/scour_long_layer.md's NAPPE_ZONE. The nappe's own influence (the first impact's ripple)
 reaches 0.3 m in the 0.60 m layer, i.e. past the 0.25 m layer's wall zone, so the zone ends at the
 wall zone, not before it. A deepest point on the zone's last bin (x_nappe >= L - WALL_ZONE - dx)
 means the wall's trough may be reaching into the zone: `at_zone_edge` says so.
 
+FACE_ZONE = 0.03 m: beside the caisson's face a bulge (x = 2.5 mm) and a dip (x = 12.5-22.5 mm)
+form under a still pond with no inflow at all (verification/scour_face_dip.py; the pond's bed
+changes nowhere else but at the end wall): the bodies' convex corners drive a spurious current
+(up to 0.37 m/s within 15 mm of the caisson's corner, in water that should stay at rest), and the
+pond's bed changes over x < 0.03 m only (0.16 mm bulge, 0.08 mm dip at 1 s, as large as the
+flowing runs' at 1 s at five of six q). So the face zone is the body's, not the nappe's.
+
 The zone columns are written into the study's copy of each run's scour.csv
-(cases/<case>_scour.csv: depth_nappe_m, x_deepest_nappe_m), computed from the run's surface
+(cases/<case>_scour.csv: depth_nappe_m, x_deepest_nappe_m, depth_face_m), computed from the run's surface
 profiles (scour_profiles.csv, kept as cases/<case>_profiles.csv), after checking that those
 profiles give the copy's whole-layer d at every time (so they are the same run's).
 """
@@ -46,7 +54,8 @@ RESULTS = Path(__file__).with_name("results") / "scour"
 CASES = RESULTS / "cases"
 LONG_LAYER = RESULTS / "long_layer"  # where docs/scour_long_layer.md keeps the 0.60 m run's profiles
 WALL_ZONE = 0.10  # m upstream of the end wall left out of d_nappe (module docstring: why 0.10)
-ZONE_COLUMNS = ("depth_nappe_m", "x_deepest_nappe_m")
+FACE_ZONE = 0.03  # m beside the caisson's face left out of d_nappe (module docstring: why 0.03)
+ZONE_COLUMNS = ("depth_nappe_m", "x_deepest_nappe_m", "depth_face_m")  # added to cases/<case>_scour.csv
 
 
 def read_profiles(path):
@@ -63,22 +72,25 @@ def layer_length(x):
     return float(x[-1] + 0.5 * (x[1] - x[0]))
 
 
-def zone_depth(x, z0, z, length, wall_zone=WALL_ZONE):
-    """(d_nappe, x_nappe) of one profile z against the initial z0: the deepest drop over the bins
-    with centre x <= length - wall_zone (0 if the surface there has only risen)."""
-    inside = x <= length - wall_zone + 1e-12
-    drop = (z0 - z)[inside]
-    k = int(np.argmax(drop))
-    return max(float(drop[k]), 0.0), float(x[inside][k])
+def zone_depth(x, z0, z, length, wall_zone=WALL_ZONE, face_zone=FACE_ZONE):
+    """(d_nappe, x_nappe, d_face) of one profile z against the initial z0: the deepest drop over
+    the bins with centre face_zone <= x <= length - wall_zone, where it is, and the deepest drop
+    over the bins with x < face_zone (each 0 if the surface there has only risen)."""
+    inside = (x >= face_zone - 1e-12) & (x <= length - wall_zone + 1e-12)
+    drop = z0 - z
+    k = int(np.argmax(drop[inside]))
+    face = drop[x < face_zone - 1e-12]
+    d_face = max(float(face.max()), 0.0) if len(face) else 0.0
+    return max(float(drop[inside][k]), 0.0), float(x[inside][k]), d_face
 
 
-def zone_series(x, t, z, length=None, wall_zone=WALL_ZONE):
-    """d_nappe(t) and x_nappe(t) over every output time of a profiles table."""
+def zone_series(x, t, z, length=None, wall_zone=WALL_ZONE, face_zone=FACE_ZONE):
+    """d_nappe(t), x_nappe(t) and d_face(t) over every output time of a profiles table."""
     length = layer_length(x) if length is None else length
-    d, xs = np.empty(len(t)), np.empty(len(t))
+    d, xs, df = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
     for k in range(len(t)):
-        d[k], xs[k] = zone_depth(x, z[:, 0], z[:, k], length, wall_zone)
-    return d, xs
+        d[k], xs[k], df[k] = zone_depth(x, z[:, 0], z[:, k], length, wall_zone, face_zone)
+    return d, xs, df
 
 
 def at_zone_edge(x_nappe, length, dx, wall_zone=WALL_ZONE):
@@ -105,15 +117,15 @@ def add_zone_columns(scour_csv, profiles_csv, wall_zone=WALL_ZONE, tol=2e-7):
     gap = np.abs(whole_layer_depth(z) - d_copy).max()
     if gap > tol:
         raise ValueError(f"{profiles_csv}: its d differs from {scour_csv} by {gap:.3g} m (another run?)")
-    d, xs = zone_series(x, t, z, wall_zone=wall_zone)
+    d, xs, df = zone_series(x, t, z, wall_zone=wall_zone)
     fields = [k for k in rows[0] if k not in ZONE_COLUMNS] + list(ZONE_COLUMNS)
-    for r, dn, xn in zip(rows, d, xs):
-        r["depth_nappe_m"], r["x_deepest_nappe_m"] = f"{dn:.6g}", f"{xn:.6g}"
+    for r, dn, xn, dfk in zip(rows, d, xs, df):
+        r["depth_nappe_m"], r["x_deepest_nappe_m"], r["depth_face_m"] = f"{dn:.6g}", f"{xn:.6g}", f"{dfk:.6g}"
     with open(scour_csv, "w", newline="") as fh:
         w = csv.DictWriter(fh, fields)
         w.writeheader()
         w.writerows(rows)
-    return d, xs
+    return d, xs, df
 
 
 def keep_profiles(case, profiles_csv, cases=CASES):
