@@ -230,7 +230,7 @@ def _switch_off(variant):
         bodies.BodyImages.prune = lambda self, particles, lists, first: lists
 
 
-def pond(dx=0.005, end_time=1.0, variant=None):
+def pond(dx=0.005, end_time=1.0, variant=None, resume=False):
     import os
     import resource
 
@@ -242,8 +242,8 @@ def pond(dx=0.005, end_time=1.0, variant=None):
     out = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else ""))
     load0 = os.getloadavg()[0]
     c0, w0 = time.process_time(), time.perf_counter()
-    run_scene(parse_scene(pond_raw(dx, end_time), SCENES / "scour_saturated.toml"), out, quiet=True,
-              overwrite=True)  # fmt: skip
+    scene = parse_scene(pond_raw(dx, end_time), SCENES / "scour_saturated.toml")
+    run_scene(scene, out, quiet=True, overwrite=True, restart=out if resume else None)
     report = json.loads((out / "run.json").read_text())
     return {
         "run": str(out.relative_to(ROOT)),
@@ -341,6 +341,7 @@ def main(argv=None):
     c.add_argument("--end", type=float, default=1.0)
     c.add_argument("--dx", type=float, default=0.005)
     c.add_argument("--without", choices=VARIANTS, help="experiment: switch this part of the body images off")
+    c.add_argument("--continue", dest="resume", action="store_true", help="extend the pond run to --end")
     d = sub.add_parser("compare")
     d.add_argument("case")
     d.add_argument("--at", type=float, default=1.0)
@@ -351,7 +352,8 @@ def main(argv=None):
         _write(f"near_{args.case}", near(args.case, args.t_from, args.t_to))
     elif args.cmd == "pond":
         tag = f"pond_dx{args.dx * 1000:g}mm" + (f"_{args.without}" if args.without else "")
-        _write(tag, pond(args.dx, args.end, args.without))
+        result = pond(args.dx, args.end, args.without, args.resume)
+        _write(tag + (f"_to{args.end:g}s" if args.resume else ""), result)
     elif args.cmd == "compare":
         _write(f"compare_{args.case}_pond_{args.at:g}s", compare(args.case, args.at))
     return 0
