@@ -5,8 +5,8 @@ nothing through the caisson or the end wall, the volume balance within one parti
 The full-length hard case (the same scene to 2 s) is a study run, `python -m verification.scour_study
 run saturated 0.11 --dx 0.0025 --end 2.0` (its run.json in docs/scour_study.md, Resolution); the
 stability matrix's saturated_jet_dx2.5mm cell (0.25 s, 335 M estimated particle-steps) is over the
-nightly's budget and is left out of a night. This window costs about 40 s of CPU (set-up 10 s, 0.025 s
-of flow about 27 s, measured in the 2 s run on 2026-12-02 at load 2-6): nightly only."""
+nightly's budget and is left out of a night. This window costs about 40 s of CPU (measured: 38 s
+wall, 40 s CPU at load 0.3-0.6 on 2026-12-02): nightly only."""
 
 import json
 
