@@ -67,3 +67,40 @@ def test_formula_exponents_leave_out_formulas_outside_their_grain_range():
     assert not any(k.startswith("Veronese 1937 B, grain with") for k in fx)
     assert not any(k.startswith("Tschopp (Bezzola 2012), grain with") for k in fx)  # no scour at q = 0.06
     assert all(np.all(below > 0) for _, below in fx.values())
+
+
+def _profiles_csv(path, x, t, z):
+    with open(path, "w") as fh:
+        fh.write("x_m," + ",".join(f"z_s(t={v:.4g})" for v in t) + "\n")
+        for k, xk in enumerate(x):
+            fh.write(f"{xk:.6g}," + ",".join(f"{v:.6g}" for v in z[k]) + "\n")
+
+
+def test_the_nappe_zone_leaves_out_the_end_wall_trough(tmp_path):
+    from verification import scour_zones as sz
+
+    x = (np.arange(50) + 0.5) * 0.005  # the 0.25 m layer's bins
+    t = np.array([0.0, 1.0, 2.0])
+    z = np.full((50, 3), 0.095)
+    z[14, 1:] -= 0.0003  # the nappe's dent at x = 0.0725 m
+    z[44, 2] -= 0.005  # the end wall's trough at x = 0.2225 m (0.0275 m before the wall)
+    z[3, 2] -= 0.0004  # a dip beside the caisson's face at x = 0.0175 m (the face zone)
+    d, xs, d_face = sz.zone_series(x, t, z)
+    assert d == pytest.approx([0.0, 0.0003, 0.0003])
+    assert xs[2] == pytest.approx(0.0725)
+    assert d_face == pytest.approx([0.0, 0.0, 0.0004])
+    assert sz.whole_layer_depth(z)[2] == pytest.approx(0.005)
+    zone = x[(x >= sz.FACE_ZONE) & (x <= 0.25 - sz.WALL_ZONE + 1e-12)]
+    assert zone.min() == pytest.approx(0.0325) and zone.max() == pytest.approx(0.1475)  # 0.03-0.15 m
+    assert not sz.at_zone_edge(xs, 0.25, 0.005).any()
+    # the study's copy gains the zone columns; another run's profiles are refused
+    prof, copy = tmp_path / "p.csv", tmp_path / "c_scour.csv"
+    _profiles_csv(prof, x, t, z)
+    copy.write_text("t_s,depth_m\n0,0\n1,0.0003\n2,0.005\n")
+    sz.add_zone_columns(copy, prof)
+    rows = copy.read_text().splitlines()
+    assert rows[0] == "t_s,depth_m,depth_nappe_m,x_deepest_nappe_m,depth_face_m"
+    assert rows[3].startswith("2,0.005,0.0003,0.0725,0.0004")
+    copy.write_text("t_s,depth_m\n0,0\n1,0.0003\n2,0.0051\n")
+    with pytest.raises(ValueError, match="another run"):
+        sz.add_zone_columns(copy, prof)

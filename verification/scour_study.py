@@ -54,6 +54,8 @@ from pathlib import Path
 
 import numpy as np
 
+from verification.scour_zones import FACE_ZONE, WALL_ZONE
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "solver" / "scenes"
 RESULTS = Path(__file__).with_name("results") / "scour"
@@ -240,6 +242,11 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=Fals
     (dest / f"{name}.json").write_text(json.dumps(summary, indent=2) + "\n")
     if (out / "scour.csv").exists():
         (dest / f"{name}_scour.csv").write_text((out / "scour.csv").read_text())
+        if (out / "scour_profiles.csv").exists():  # the nappe-zone depth (verification/scour_zones.py)
+            from verification.scour_zones import add_zone_columns, keep_profiles
+
+            add_zone_columns(dest / f"{name}_scour.csv", out / "scour_profiles.csv")
+            keep_profiles(name, out / "scour_profiles.csv", dest)
     print(
         f"{name}: {status}, t = {summary['t_reached']:.4f} s, {wall:.0f} s wall, {cpu:.0f} s CPU"
         + (f" (this segment; {summary['cpu_s']:.0f} s CPU in all)" if len(segments) > 1 else ""),
@@ -300,6 +307,15 @@ def load_case(path):
     c["d"] = np.array([float(r["depth_m"]) for r in rows])
     c["x_deepest"] = np.array([float(r["x_deepest_m"]) for r in rows])
     c["eroded"] = np.array([float(r["eroded_area_m2"]) for r in rows])
+    # the nappe-zone depth (verification/scour_zones.py); nan where the copy has no zone columns
+    zoned = bool(rows) and "depth_nappe_m" in rows[0]
+    for key, col in (
+        ("d_nappe", "depth_nappe_m"),
+        ("x_nappe", "x_deepest_nappe_m"),
+        ("d_face", "depth_face_m"),
+    ):
+        ok = zoned and col in rows[0]
+        c[key] = np.array([float(r[col]) for r in rows]) if ok else np.full(len(rows), np.nan)
     return c
 
 
@@ -307,20 +323,21 @@ def load_cases():
     return [load_case(path) for path in sorted((RESULTS / "cases").glob("*.json"))]
 
 
-def depth_at(c, t):
-    """d at time t (nan if the run did not reach it)."""
+def depth_at(c, t, key="d"):
+    """d (key "d_nappe": the nappe-zone depth) at time t (nan if the run did not reach it)."""
     if not len(c["t"]) or c["t"][-1] < t - 1e-9:
         return float("nan")
-    return float(np.interp(t, c["t"], c["d"]))
+    return float(np.interp(t, c["t"], c[key]))
 
 
-def steady_change(c, window=STEADY_WINDOW):
-    """|d(T) - d(T - window)| / d(T) at the time reached T (nan before `window` or with d = 0): the
-    issue's "hole stops deepening" test is this < STEADY_CHANGE."""
-    if not len(c["t"]) or c["t"][-1] < window - 1e-9 or c["d"][-1] <= 0:
+def steady_change(c, window=STEADY_WINDOW, key="d", at=None):
+    """|d(T) - d(T - window)| / d(T) at T = `at` (default: the time reached; nan before `window`, past
+    the end or with d = 0): the issue's "hole stops deepening" test is this < STEADY_CHANGE. key
+    "d_nappe": the same for the nappe-zone depth."""
+    T = c["t"][-1] if len(c["t"]) and at is None else at
+    if T is None or T < window - 1e-9 or not np.isfinite(depth_at(c, T, key)) or depth_at(c, T, key) <= 0:
         return float("nan")
-    T = c["t"][-1]
-    return abs(c["d"][-1] - depth_at(c, T - window)) / c["d"][-1]
+    return abs(depth_at(c, T, key) - depth_at(c, T - window, key)) / depth_at(c, T, key)
 
 
 def is_base(c):
@@ -439,7 +456,10 @@ def report(out=RESULTS):
     # table
     fields = ["case", "soil", "q", "dx_mm", "status", "t_reached_s"]
     fields += [f"d_{t:g}s_mm" for t in fixed]
-    fields += ["d_end_mm", "d_change_last_0.5s_pct", "x_deepest_end_m", "eroded_end_cm2", "body_leaks"]
+    fields += ["d_end_mm", "d_change_last_0.5s_pct", "x_deepest_end_m", "eroded_end_cm2"]
+    fields += [f"d_nappe_{t:g}s_mm" for t in fixed]
+    fields += ["d_nappe_end_mm", "d_nappe_change_last_0.5s_pct", "x_deepest_nappe_end_m", "d_face_end_mm"]
+    fields += ["body_leaks"]
     fields += ["balance_residual_particles", "steps", "particles_end", "wall_s", "cpu_s", "load_start"]
     fields += ["load_end", "threads", "solver"]
     rows = []
@@ -460,6 +480,15 @@ def report(out=RESULTS):
         row["d_change_last_0.5s_pct"] = f"{100 * change:.0f}" if np.isfinite(change) else ""
         row["x_deepest_end_m"] = f"{c['x_deepest'][-1]:.3f}" if len(c["d"]) else ""
         row["eroded_end_cm2"] = f"{1e4 * c['eroded'][-1]:.1f}" if len(c["d"]) else ""
+        for t in fixed:
+            v = depth_at(c, t, "d_nappe")
+            row[f"d_nappe_{t:g}s_mm"] = "" if not np.isfinite(v) else f"{1000 * v:.2f}"
+        zoned = len(c["d"]) and np.isfinite(c["d_nappe"][-1])
+        row["d_nappe_end_mm"] = f"{1000 * c['d_nappe'][-1]:.2f}" if zoned else ""
+        change = steady_change(c, key="d_nappe")
+        row["d_nappe_change_last_0.5s_pct"] = f"{100 * change:.0f}" if np.isfinite(change) else ""
+        row["x_deepest_nappe_end_m"] = f"{c['x_nappe'][-1]:.3f}" if zoned else ""
+        row["d_face_end_mm"] = f"{1000 * c['d_face'][-1]:.2f}" if zoned else ""
         row["body_leaks"] = c.get("body_leaks")
         row["balance_residual_particles"] = f"{residual(c):.2g}"
         row["steps"] = c["steps"]
@@ -487,6 +516,10 @@ def report(out=RESULTS):
         "d_change_last_0.5s_pct: |d(end) - d(end - 0.5 s)| / d(end); the issue's \"the hole stops",
         'deepening" is < 2. solver: the commit the run was made at (a continued run: its last',
         "segment's; empty: made before the commit was recorded, before 2026-12-01 19:30 on branch scour3).",
+        f"d_nappe: the same depth over the nappe zone only, from FACE_ZONE = {FACE_ZONE:g} m beside the",
+        f"caisson's face to WALL_ZONE = {WALL_ZONE:g} m before the end wall (scour_zones.py says",
+        "why), x_deepest_nappe where it is reached; d_face: the deepest drop within FACE_ZONE of the",
+        "caisson's face (the bodies' corner artefact); empty for a run whose profiles were not kept.",
         "",
         "| " + " | ".join(fields) + " |",
         "|" + "---|" * len(fields),
@@ -513,6 +546,7 @@ def report(out=RESULTS):
                     + (f" ± {se:.2f}" if np.isfinite(se) else "")
                     + " |"
                 )
+    lines += _nappe_zone_section(cases)
     fx = formula_exponents()
     lines += ["", "Published formulas in this set-up (verification/analytic/scour_formulas.py, loss-free", ""]
     lines[-2] += " tailwater; equilibrium depths, below the original bed; the layer is 0.095 m deep):"
@@ -525,6 +559,7 @@ def report(out=RESULTS):
     (out / "scour_study.md").write_text("\n".join(lines) + "\n")
 
     _plot_depth_vs_time(plt, cases, out / "depth_vs_time.png")
+    _plot_nappe_depth(plt, cases, out / "depth_nappe_vs_time.png")
     _plot_depth_vs_q(plt, cases, fixed, fx, out / "depth_vs_q.png")
     _plot_resolution(plt, cases, out / "resolution.png")
     _plot_snapshots(plt, out / "snapshots_q0.11.png")
@@ -535,6 +570,63 @@ def report(out=RESULTS):
     _plot_sensitivity(plt, every, out / "sensitivity.png")
     print(f"report in {out}/scour_study.md")
     return 0
+
+
+STEADY_TIMES = (1.0, 1.5, 2.0, 2.5)  # s: when the "hole stops deepening" test is read (those reached)
+
+
+def _nappe_zone_section(cases):
+    """The nappe-zone depth: growth with q, saturated against dry, and the issue's < 2 % test at
+    STEADY_TIMES, each beside the whole-layer d."""
+    zoned = [c for c in cases if np.isfinite(c["d_nappe"]).all() and len(c["d_nappe"])]
+    if not zoned:
+        return []
+    lines = ["", "## The nappe-zone depth (d_nappe; verification/scour_zones.py)", ""]
+    lines += [
+        f"d_nappe: the deepest drop from {FACE_ZONE:g} m beside the caisson's face to {WALL_ZONE:g} m before"
+        " the end wall (0.03 ≤ x ≤ 0.15 m in the 0.25 m layer); the whole-layer d beside it.",
+        "",
+        "| soil | dx (mm) | time (s) | q values | d_nappe (mm) | exponent of q (d_nappe) | d (mm) "
+        "| exponent of q (d) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for soil in SOILS:
+        for dx in sorted({c["dx"] for c in zoned}):
+            sel = sorted((c for c in zoned if c["soil"] == soil and c["dx"] == dx and c["length"] == 0.25),
+                         key=lambda c: c["q"])  # fmt: skip
+            for t in FIXED_TIMES:
+                sel_t = [c for c in sel if np.isfinite(depth_at(c, t))]
+                if len(sel_t) < 2:
+                    continue
+                qs = [c["q"] for c in sel_t]
+                dn = [depth_at(c, t, "d_nappe") for c in sel_t]
+                d = [depth_at(c, t) for c in sel_t]
+                en, sen, _ = q_exponent_fit(qs, dn)
+                e, se, _ = q_exponent_fit(qs, d)
+                lines.append(
+                    f"| {soil} | {dx * 1000:g} | {t:g} | {', '.join(f'{q:g}' for q in qs)} | "
+                    f"{', '.join(f'{1000 * v:.2f}' for v in dn)} | {en:.2f} ± {sen:.2f} | "
+                    f"{', '.join(f'{1000 * v:.2f}' for v in d)} | {e:.2f} ± {se:.2f} |"
+                )
+    lines += [
+        "",
+        'The issue\'s "the hole stops deepening" (d changing < 2 % over 0.5 s) at each time reached,',
+        "for d_nappe and (in brackets) d; x: where d_nappe is at that time (m).",
+        "",
+        "| case | " + " | ".join(f"{t:g} s" for t in STEADY_TIMES) + " |",
+        "|---|" + "---|" * len(STEADY_TIMES),
+    ]
+    for c in sorted(zoned, key=lambda c: (c["dx"], c["length"], c["soil"], c["q"])):
+        cells = []
+        for t in STEADY_TIMES:
+            if c["t_reached"] < t - 1e-9:
+                cells.append("")
+                continue
+            a, b = steady_change(c, key="d_nappe", at=t), steady_change(c, at=t)
+            xn = float(np.interp(t, c["t"], c["x_nappe"]))
+            cells.append(f"{100 * a:.1f} % ({100 * b:.1f} %), x = {xn:.3f}")
+        lines.append(f"| {c['case']} | " + " | ".join(cells) + " |")
+    return lines
 
 
 def sensitivity_cases(cases):
@@ -715,6 +807,28 @@ def _plot_depth_vs_time(plt, cases, path):
     plt.close(fig)
 
 
+def _plot_nappe_depth(plt, cases, path):
+    """d_nappe(t) per q (solid) beside the whole-layer d(t) (dotted), dry and saturated, 5 mm."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
+    cmap = plt.get_cmap("viridis")
+    for ax, soil in zip(axes, SOILS):
+        sel = sorted((c for c in cases if c["soil"] == soil and c["dx"] == DX and c["length"] == 0.25
+                      and np.isfinite(c["d_nappe"]).all()), key=lambda c: c["q"])  # fmt: skip
+        for c in sel:
+            colour = cmap((c["q"] - 0.06) / 0.05 * 0.9)
+            ax.plot(c["t"], 1000 * c["d_nappe"], "-", color=colour, label=f"q = {c['q']:.2f} m²/s")
+            ax.plot(c["t"], 1000 * c["d"], ":", color=colour, lw=0.9)
+        ax.set_ylim(0.0, 1.6)
+        zone = f"{FACE_ZONE:g} ≤ x ≤ L − {WALL_ZONE:g} m"
+        ax.set_title(f"{soil}, 5 mm: d_nappe ({zone}), dotted: whole-layer d", fontsize=9)
+        ax.set_xlabel("t (s)")
+        ax.legend(fontsize=8)
+    axes[0].set_ylabel("scour depth (mm); d clipped at 1.6 mm")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def _plot_depth_vs_q(plt, cases, fixed, fx, path):
     fig, ax = plt.subplots(figsize=(7, 4.5))
     markers = {"dry": "o", "saturated": "s"}
@@ -750,19 +864,21 @@ def _plot_resolution(plt, cases, path):
     fine = [c for c in cases if c["dx"] == DX_FINE]
     if not fine:
         return
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for c in fine:
-        coarse = next(
-            (k for k in cases if k["dx"] == DX and k["soil"] == c["soil"] and k["q"] == c["q"]
-             and k["length"] == c["length"]), None)  # fmt: skip
-        (line,) = ax.plot(c["t"], 1000 * c["d"], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
-        if coarse is not None:
-            ax.plot(coarse["t"], 1000 * coarse["d"], "--", color=line.get_color(), label="same, 5 mm")
-    ax.set_xlim(0.0, 1.25 * max(c["t_reached"] for c in fine))  # where both resolutions have data
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("scour depth d (mm)")
-    ax.set_title("resolution: 5 mm against 2.5 mm")
-    ax.legend(fontsize=8)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    nappe = f"d_nappe ({FACE_ZONE:g} ≤ x ≤ L − {WALL_ZONE:g} m)"
+    for ax, key, what in zip(axes, ("d", "d_nappe"), ("whole-layer d", nappe)):
+        for c in fine:
+            coarse = next(
+                (k for k in cases if k["dx"] == DX and k["soil"] == c["soil"] and k["q"] == c["q"]
+                 and k["length"] == c["length"]), None)  # fmt: skip
+            (line,) = ax.plot(c["t"], 1000 * c[key], "-", label=f"{c['soil']}, q = {c['q']:.2f}, 2.5 mm")
+            if coarse is not None:
+                ax.plot(coarse["t"], 1000 * coarse[key], "--", color=line.get_color(), label="same, 5 mm")
+        ax.set_xlim(0.0, 1.05 * max(c["t_reached"] for c in fine))  # where both resolutions have data
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(f"{what} (mm)")
+        ax.set_title(f"resolution, {what}: 5 mm against 2.5 mm", fontsize=9)
+        ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
