@@ -19,7 +19,7 @@ import os
 import sys
 
 from . import seepage_common as sc
-from .common import RESULTS
+from .common import RESULTS, script_parser
 
 OUT = RESULTS / "seepage_pore_gradient"
 CASES = {  # the CI sizes (tests/test_seepage_verification.py), each the case's own run()
@@ -102,11 +102,24 @@ def table():
     return text
 
 
-if __name__ == "__main__":
-    if sys.argv[1] == "--table":
+def main(argv=None):
+    parser = script_parser(sys.modules[__name__])
+    parser.add_argument("case", nargs="?", choices=[*CASES, "all"], help="a seepage case, or all four")
+    parser.add_argument("setting", nargs="?", choices=SETTINGS, help="numerics.pore_pressure_gradient")
+    parser.add_argument("resolution", nargs="?", type=int, help="the case's resolution (default: CI size)")
+    parser.add_argument("--table", action="store_true", help="write the table of the results on disk")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if args.table:
         print(table())
-    else:
-        cases = list(CASES) if sys.argv[1] == "all" else [sys.argv[1]]
-        for case in cases:
-            r = run_case(case, sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else None)
-            print(json.dumps(r, indent=1), flush=True)
+        return
+    if args.case is None or args.setting is None:
+        parser.error("case and setting: required without --table (e.g. all symmetric)")
+    if args.resolution is not None and args.resolution <= 0:
+        parser.error(f"resolution: a positive integer, got {args.resolution}")
+    for case in list(CASES) if args.case == "all" else [args.case]:
+        r = run_case(case, args.setting, args.resolution)
+        print(json.dumps(r, indent=1), flush=True)
+
+
+if __name__ == "__main__":
+    main()
