@@ -42,8 +42,11 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     plotter = pv.Plotter(off_screen=True, window_size=(1600, int(np.clip(1600 / 1.2 * aspect, 300, 1400))))
     plotter.set_background("white")
     span = float(np.max(hi - lo))
-    material = np.asarray(fields["material"]).ravel() if "material" in fields else np.zeros(cloud.n_points)
-    water = np.isin(material, np.asarray(water_ids, dtype=int)) if "material" in fields else material > 0
+    water = (
+        np.isin(np.asarray(fields["material"]).ravel(), np.asarray(water_ids, dtype=int))
+        if "material" in fields
+        else np.zeros(cloud.n_points, dtype=bool)
+    )
     layered = bool(water.any() and (~water).any())  # water and soil in one picture
     spacing = _spacing(cloud.points[~water] if layered else cloud.points)
     size = point_size or max(2.0, 1200.0 / max(span / max(spacing, 1e-12), 1.0))
