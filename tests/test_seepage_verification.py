@@ -65,34 +65,41 @@ def test_mixture_pore_pressure_operators_disagree_off_lattice():
 
 @pytest.fixture(scope="module")
 def terzaghi_ci():
-    return seepage_terzaghi.run_one(10, "mixture")
+    """dx = 10 mm, mixture, to T_v = 0.2: the early isochrones, where the goal's margin is thinnest and
+    where the density diffusion's drain showed first (17 % at T_v = 0.1). The late ones (0.5, 1) cost
+    80 % of a run to T_v = 1 and run nightly (below, and in the case at its default resolution)."""
+    return seepage_terzaghi.run_one(10, "mixture", tv_list=(0.1, 0.2))
 
 
 @pytest.mark.slow
-def test_terzaghi_consolidation_runs_to_tv1(terzaghi_ci):
-    """dx = 10 mm, mixture: from the undrained state to T_v = 1 without blow-up; the degree of
-    consolidation grows with T_v (the profile errors against the series are the case's checks)."""
-    degrees = [o["U"] for o in terzaghi_ci["tv"].values()]
-    assert list(terzaghi_ci["tv"]) == [0.1, 0.2, 0.5, 1.0]
-    assert all(b > a for a, b in zip(degrees, degrees[1:])), degrees
-    assert all(np.isfinite(o["u"]).all() for o in terzaghi_ci["tv"].values())
+def test_terzaghi_consolidation_runs_to_tv_0_2(terzaghi_ci):
+    """From the undrained state to T_v = 0.2 without blow-up; the degree of consolidation grows with T_v
+    and at T_v = 0.2 lies within 0.05 of the series' (the profile errors against it are the checks)."""
+    tv = terzaghi_ci["tv"]
+    assert list(tv) == [0.1, 0.2] and tv[0.2]["U"] > tv[0.1]["U"], [o["U"] for o in tv.values()]
+    assert all(np.isfinite(o["u"]).all() for o in tv.values())
+    assert abs(tv[0.2]["U"] - tv[0.2]["U_exact"]) < 0.05
 
 
 @pytest.mark.slow
-def test_terzaghi_late_profiles_meet_the_goal(terzaghi_ci):
-    """dx = 10 mm: at T_v = 0.5 and 1 the profile error is within the issue's 2 % (0.5 %, 0.3 %
-    measured). Guards the pore water against the density diffusion, which drained the column 1.85
-    times too fast (17 % at T_v = 0.1, 16 % at 0.5: docs/seepage.md, "Density diffusion and pore water")."""
-    errors = {tv: terzaghi_ci["tv"][tv]["error"] for tv in (0.5, 1.0)}
-    assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
-    assert abs(terzaghi_ci["tv"][0.2]["U"] - terzaghi_ci["tv"][0.2]["U_exact"]) < 0.05
-
-
-@pytest.mark.slow
-def test_terzaghi_meets_the_issue_goal_at_every_tv(terzaghi_ci):
-    """dx = 10 mm: the profile error is within the issue's 2 % at T_v = 0.1, 0.2, 0.5 and 1 (1.9, 1.2,
-    0.5, 0.3 % measured; the T_v = 0.1 margin is thin: docs/seepage.md, case 3)."""
+def test_terzaghi_early_profiles_meet_the_issue_goal(terzaghi_ci):
+    """dx = 10 mm: the profile error is within the issue's 2 % at T_v = 0.1 and 0.2 (1.9 and 1.2 %
+    measured; the T_v = 0.1 margin is thin: docs/seepage.md, case 3). Guards the pore water against the
+    density diffusion, which drained the column 1.85 times too fast (17 % at T_v = 0.1: docs/seepage.md,
+    "Density diffusion and pore water")."""
     errors = {tv: o["error"] for tv, o in terzaghi_ci["tv"].items()}
+    assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
+
+
+@pytest.mark.nightly
+def test_terzaghi_meets_the_issue_goal_at_every_tv():
+    """dx = 10 mm, to T_v = 1: the profile error is within the issue's 2 % at T_v = 0.1, 0.2, 0.5 and 1
+    (1.9, 1.2, 0.5, 0.3 % measured) and the degree of consolidation grows with T_v."""
+    res = seepage_terzaghi.run_one(10, "mixture")
+    assert list(res["tv"]) == [0.1, 0.2, 0.5, 1.0]
+    degrees = [o["U"] for o in res["tv"].values()]
+    assert all(b > a for a, b in zip(degrees, degrees[1:])), degrees
+    errors = {tv: o["error"] for tv, o in res["tv"].items()}
     assert all(e <= seepage_terzaghi.GOAL for e in errors.values()), errors
 
 

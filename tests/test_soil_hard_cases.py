@@ -181,9 +181,10 @@ def _deposit_stays_at_rest(dx, scheme="seed"):
     return d
 
 
-@pytest.mark.slow
+@pytest.mark.nightly
 def test_collapse_deposit_stays_at_rest_for_10_collapse_times():
-    # dx = 5 mm (800 particles, ~2.5 min), the coarsest spacing of the resolution study, seed scheme.
+    # dx = 5 mm (800 particles, ~20 s), the coarsest spacing of the resolution study, seed scheme;
+    # nightly: make test holds the CI-size deposit with the defaults (below) and the seed's known defect.
     # Measured (t = 1 -> 4 s): kinetic energy 1.2e-6 -> 1e-7 J/m (peak ~0.8 J/m), largest
     # displacement 0.33 dx (a bottom-row particle at the old toe), none beyond dx/2.
     _deposit_stays_at_rest(0.005)
