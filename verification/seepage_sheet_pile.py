@@ -102,6 +102,7 @@ E_FIXED = 1.0e5  # the fixed skeleton's stiffness plays no part (as seepage_darc
 DIFFUSION = "fourtakas"  # the default; pore water left out (see the module docstring)
 PILE_SKELETON = True  # fixed soil particles inside the pile below the ground (module docstring)
 PRESSURE_GRADIENT = "corrected"  # the pore water's pressure force (module docstring)
+PORE_DIFFUSION = "none"  # numerics.pore_density_diffusion (docs/seepage.md, "The pore water's odd-even mode")
 PILE_VELOCITY = True  # the pile below the ground carries the mirrored pore-water velocity (PileWallPressure)
 PILE = "particles"  # "body" (image particles) or "particles" (fixed water): see the module docstring
 T_END = 1.0  # s: Q is steady from 0.2 s (the pore water's storage time (2T)^2 / c_v ~ 0.02 s)
@@ -168,7 +169,7 @@ def reference_line(line):
 
 def scene(
     resolution, t_end=T_END, formulation="seed", diffusion=DIFFUSION, pile=PILE, pile_skeleton=PILE_SKELETON,
-    pressure_gradient=PRESSURE_GRADIENT,
+    pressure_gradient=PRESSURE_GRADIENT, pore_diffusion=PORE_DIFFUSION,
 ):  # fmt: skip
     dx = T / resolution
     p0, p1 = HALF - 0.5 * W, HALF + 0.5 * W  # the pile
@@ -207,7 +208,7 @@ def scene(
     args = ("seepage_sheet_pile", dx, t_end, [right, top + 0.02], mats)
     rest = dict(
         formulation=formulation, walls=walls, bodies=bodies, density_diffusion=diffusion,
-        pore_pressure_gradient=pressure_gradient,
+        pore_pressure_gradient=pressure_gradient, pore_density_diffusion=pore_diffusion,
     )  # fmt: skip
     built = sc.scene(*args, blocks, **rest)
     if pile and pile_skeleton and pile == "particles":
@@ -446,11 +447,14 @@ def measure(sim):
 def run_one(
     resolution=DEFAULT_RESOLUTION, t_end=T_END, formulation="seed", diffusion=DIFFUSION, samples=21,
     pile=PILE, wall_pressure=True, held_pore_water=False, pile_skeleton=PILE_SKELETON,
-    pressure_gradient=PRESSURE_GRADIENT, pile_velocity=PILE_VELOCITY,
+    pressure_gradient=PRESSURE_GRADIENT, pile_velocity=PILE_VELOCITY, pore_diffusion=PORE_DIFFUSION,
 ):  # fmt: skip
     from solver.simulation import Simulation
 
-    sim = Simulation(scene(resolution, t_end, formulation, diffusion, pile, pile_skeleton, pressure_gradient))
+    built = scene(
+        resolution, t_end, formulation, diffusion, pile, pile_skeleton, pressure_gradient, pore_diffusion
+    )
+    sim = Simulation(built)
     start_at_reference(sim, formulation)
     hooks = [PileWallPressure(sim, pile_velocity)] if pile == "particles" and wall_pressure else []
     if held_pore_water:
