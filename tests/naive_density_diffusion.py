@@ -66,14 +66,15 @@ def midpoint_continuity(targets, x, x_old, v, rho, mass, h, dim, nbr_lists):
 
 
 def pore_density_diffusion(targets, x, rho, mass, fraction, c0, delta, h, dim, nbr_lists, rho_ref=None,
-                           fixed=None):  # fmt: skip
+                           fixed=None, scaled=True):  # fmt: skip
     """solver/physics/seepage_pore_diffusion.py from its equations: among pore water (fraction < 1, not
-    fixed) only, Antuono et al.'s (2010) eqs. (6)-(8) on q = rho / f - rho^H, the rate times f_i.
-    Returns (the rates, the renormalised gradients)."""
+    fixed) only, Antuono et al.'s (2010) eqs. (6)-(8) on q = rho / f - rho^H, the rate times f_i; with
+    scaled False (the seed's pore_label) f = 1. Returns (the rates, the renormalised gradients)."""
     ref = np.zeros(len(x)) if rho_ref is None else rho_ref
     fixed = np.zeros(len(x), bool) if fixed is None else fixed
     pore = (fraction < 1.0) & ~fixed
-    q = rho / fraction - ref
+    f = fraction if scaled else np.ones(len(x))
+    q = rho / f - ref
     lists = [[j for j in nbrs if pore[j]] for nbrs in nbr_lists]
     grad = np.zeros((len(x), dim))
     for t, i in enumerate(targets):
@@ -96,5 +97,5 @@ def pore_density_diffusion(targets, x, rho, mass, fraction, c0, delta, h, dim, n
             xji = x[j] - x[i]
             psi = 2.0 * (q[j] - q[i]) * xji / np.dot(xji, xji) - (grad[i] + grad[j])
             total += np.dot(psi, grad_w(x[i], x[j], h, dim)) * mass[j] / rho[j]
-        out[i] = fraction[i] * delta * h * c0 * total
+        out[i] = f[i] * delta * h * c0 * total
     return out, grad

@@ -15,16 +15,19 @@ from solver.physics import seepage_pore_diffusion as pd
 N = 0.4
 
 
-def run(x, rho, mass, fraction, h, dim, nl, targets, rho_ref=None, fixed=None):
+def run(x, rho, mass, fraction, h, dim, nl, targets, rho_ref=None, fixed=None, scaled=True):
     norm = cubic_spline_normalisation(dim, h)
     is3d = True if dim == 3 else None
     grad = np.zeros((len(x), dim))
+    scaled = True if scaled else None
     pd.pore_density_gradient(
-        targets, nl.start, nl.index, x, rho, mass, fraction, h, norm, grad, rho_ref, fixed, is3d
+        targets, nl.start, nl.index, x, rho, mass, fraction, h, norm, grad, rho_ref, fixed, is3d, scaled
     )  # fmt: skip
     out = np.zeros(len(x))
-    pd.pore_density_diffusion(targets, nl.start, nl.index, x, rho, mass, np.zeros(len(x), np.int32), fraction,
-                              grad, np.array([C0]), DELTA, h, norm, out, rho_ref, fixed, is3d)  # fmt: skip
+    pd.pore_density_diffusion(
+        targets, nl.start, nl.index, x, rho, mass, np.zeros(len(x), np.int32), fraction, grad, np.array([C0]),
+        DELTA, h, norm, out, rho_ref, fixed, is3d, scaled,
+    )  # fmt: skip
     return out, grad
 
 
@@ -39,15 +42,20 @@ def bed(rng, dim, jitter=0.15):
     return x, rho, mass, fraction, h
 
 
-@pytest.mark.parametrize("dim,ref,walls", [(2, False, False), (2, True, True), (3, True, False)])
-def test_matches_twin(rng, dim, ref, walls):
+@pytest.mark.parametrize(
+    "dim,ref,walls,scaled", [(2, False, False, True), (2, True, True, False), (3, True, False, True)]
+)
+def test_matches_twin(rng, dim, ref, walls, scaled):
+    """scaled: the mixture's water_fraction (apparent density); else the seed's pore_label (a mark only)."""
     x, rho, mass, fraction, h = bed(rng, dim)
+    if not scaled:  # the seed's pore water is at its true density
+        rho, mass = rho / fraction, mass / fraction
     targets, nl, lists = neighbours(x, dim, h)
     rho_ref = RHO0 + rng.normal(0, 3, len(x)) if ref else None
     fixed = rng.random(len(x)) < 0.1 if walls else None
-    got, grad = run(x, rho, mass, fraction, h, dim, nl, targets, rho_ref, fixed)
+    got, grad = run(x, rho, mass, fraction, h, dim, nl, targets, rho_ref, fixed, scaled)
     want, want_grad = naive.pore_density_diffusion(targets, x, rho, mass, fraction, C0, DELTA, h, dim, lists,
-                                                   rho_ref, fixed)  # fmt: skip
+                                                   rho_ref, fixed, scaled)  # fmt: skip
     np.testing.assert_allclose(grad, want_grad, rtol=1e-9, atol=1e-9 * np.abs(want_grad).max())
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
     free = (fraction >= 1.0) | (fixed if fixed is not None else False)
