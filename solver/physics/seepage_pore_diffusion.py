@@ -176,7 +176,7 @@ def pore_settings(scene, materials):
     # pore water means soil, and scenes with soil run the seed leap-frog (scene.py refuses the midpoint one)
     hydrostatic = scene.numerics.density_diffusion == DensityDiffusion.FOURTAKAS
     walls = any(b.fixed and scene.materials[b.material].model == "water" for b in scene.blocks)
-    return scene.numerics.density_diffusion_delta, field, hydrostatic, walls
+    return scene.numerics.pore_density_diffusion_delta, field, hydrostatic, walls
 
 
 class _PoreTerm(Term):
