@@ -447,7 +447,7 @@ def measure(sim):
     ref_norm = (h_ref(x, y) - H_DOWN) / (H_UP - H_DOWN)
     # the line checks compare the weakly compressible water's own head (barotropic_head), normalised by the
     # ponds' in the same measure; y + p / gamma_w ("_h") is reported beside it
-    star = y + barotropic_head(sim, ps["p"][wa])
+    star = y + barotropic_head(sim.plan.materials, ps["p"][wa])
     s_up, s_down = float(star[row & (x < 0)].mean()), float(star[row & (x > 0)].mean())
     for name, sel in lines.items():
         norm = (star[sel] - s_down) / (s_up - s_down)
@@ -458,7 +458,7 @@ def measure(sim):
     return out
 
 
-def barotropic_head(sim, p):
+def barotropic_head(materials, p):
     """Pi(p) / g, Pi(p) = int_0^p dp' / rho(p') for the water's Tait law (seed eq. 9):
     Pi = (B / rho0) [(1 + p / B)^(1 - 1/gamma) - 1] / (1 - 1/gamma). For a barotropic fluid under gravity
     -grad p / rho + g = -g grad(y + Pi / g), so in still water y + Pi / g is uniform and in the pores the drag
@@ -466,9 +466,8 @@ def barotropic_head(sim, p):
     the weak compressibility's excess, p / gamma_w - Pi / g = g d^2 / (2 c^2) at depth d below a free surface
     (c = 20 m/s: 1.1 mm at the upstream base, 0.019 dH), which does not shrink with dx (docs/seepage.md,
     case 5, "The base offset")."""
-    mats = sim.plan.materials
-    k = mats.names.index("water")
-    rho0, b, gamma = mats.rho0[k], mats.eos_b[k], mats.eos_exponent[k]
+    k = materials.names.index("water")
+    rho0, b, gamma = materials.rho0[k], materials.eos_b[k], materials.eos_exponent[k]
     a = 1.0 - 1.0 / gamma
     return (b / rho0) * ((1.0 + np.asarray(p) / b) ** a - 1.0) / a / sc.G
 
