@@ -111,5 +111,10 @@ def test_option_builds_only_when_asked():
     scene = case.scene(10, "mixture")
     mats = build_material_table(scene)
     assert Rate.build(scene, mats) is None and Gradient.build(scene, mats) is None
+    from verification.common import scene_from_file
+
+    tank = scene_from_file("hydrostatic_tank_2d.toml", **{"numerics.pore_density_diffusion": "antuono"})
+    assert Rate.build(tank, build_material_table(tank)) is None  # no pore water: no term, asked or not
+    assert Gradient.build(tank, build_material_table(tank)) is None
     on = case.scene(10, "mixture", pore_density_diffusion="antuono")
     assert Rate.build(on, mats) is not None and Gradient.build(on, mats) is not None
