@@ -321,6 +321,10 @@ class Numerics(Strict):
     # pore water's own pressure gradient: "symmetric" (seed eq. 7) or "corrected" (the kernel-gradient-
     # corrected difference form, exact for a linear pressure; solver/physics/pore_pressure_gradient.py)
     pore_pressure_gradient: Literal["symmetric", "corrected"] = "symmetric"
+    # pore water's density diffusion: "none" (pore water out of density_diffusion) or "antuono" (delta-SPH
+    # with Antuono et al.'s gradient correction, on pore water only; solver/physics/seepage_pore_diffusion.py)
+    pore_density_diffusion: Literal["none", "antuono"] = "none"
+    pore_density_diffusion_delta: Annotated[float, Field(gt=0.0, le=1.0)] = 0.1  # docs/seepage.md
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off

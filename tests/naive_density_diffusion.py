@@ -63,3 +63,39 @@ def midpoint_continuity(targets, x, x_old, v, rho, mass, h, dim, nbr_lists):
         for j in nbr_lists[t]:
             out[i] += mass[j] * np.dot(v[i] - v[j], grad_w(mid[i], mid[j], h, dim))
     return out
+
+
+def pore_density_diffusion(targets, x, rho, mass, fraction, c0, delta, h, dim, nbr_lists, rho_ref=None,
+                           fixed=None, scaled=True):  # fmt: skip
+    """solver/physics/seepage_pore_diffusion.py from its equations: among pore water (fraction < 1, not
+    fixed) only, Antuono et al.'s (2010) eqs. (6)-(8) on q = rho / f - rho^H, the rate times f_i; with
+    scaled False (the seed's pore_label) f = 1. Returns (the rates, the renormalised gradients)."""
+    ref = np.zeros(len(x)) if rho_ref is None else rho_ref
+    fixed = np.zeros(len(x), bool) if fixed is None else fixed
+    pore = (fraction < 1.0) & ~fixed
+    f = fraction if scaled else np.ones(len(x))
+    q = rho / f - ref
+    lists = [[j for j in nbrs if pore[j]] for nbrs in nbr_lists]
+    grad = np.zeros((len(x), dim))
+    for t, i in enumerate(targets):
+        if not pore[i]:
+            continue
+        m = np.zeros((dim, dim))
+        u = np.zeros(dim)
+        for j in lists[t]:
+            gw = grad_w(x[i], x[j], h, dim)
+            m += np.outer(x[j] - x[i], gw) * mass[j] / rho[j]
+            u += (q[j] - q[i]) * gw * mass[j] / rho[j]
+        if abs(np.linalg.det(m)) > 1e-300:
+            grad[i] = np.linalg.solve(m.T, u)
+    out = np.zeros(len(x))
+    for t, i in enumerate(targets):
+        if not pore[i]:
+            continue
+        total = 0.0
+        for j in lists[t]:
+            xji = x[j] - x[i]
+            psi = 2.0 * (q[j] - q[i]) * xji / np.dot(xji, xji) - (grad[i] + grad[j])
+            total += np.dot(psi, grad_w(x[i], x[j], h, dim)) * mass[j] / rho[j]
+        out[i] = f[i] * delta * h * c0 * total
+    return out, grad

@@ -43,9 +43,10 @@ def test_seed_pore_water_is_labelled_and_left_out_of_the_density_diffusion():
 
 
 def test_the_case_runs_the_corrected_pore_pressure_and_a_skeleton_in_the_pile():
-    """The case's two choices (module docstring): the pore water's corrected pressure force
-    (numerics.pore_pressure_gradient, opt-in, off by default) and fixed soil in the pile below the
-    ground, at the pile's own particle sites, so the drag sum beside the pile has a full support."""
+    """The case's choices (module docstring): the pore water's corrected pressure force
+    (numerics.pore_pressure_gradient, opt-in, off by default), fixed soil in the pile below the
+    ground, at the pile's own particle sites, so the drag sum beside the pile has a full support, and
+    the pore water's corrected density diffusion (numerics.pore_density_diffusion, opt-in)."""
     from solver.initial_state import create_particles
 
     scene = sp.scene(20, 0.1)
@@ -61,6 +62,13 @@ def test_the_case_runs_the_corrected_pore_pressure_and_a_skeleton_in_the_pile():
     inside = (np.abs(x[:, 0] - sp.HALF) < 0.5 * sp.W) & (x[:, 1] > sp.T - sp.S)
     assert inside.sum() == round(sp.W / 0.01) * round(sp.S / 0.01)  # the pile's 4 x 10 sites at 10 mm
     assert scene_from_file("dam_break_2d.toml").numerics.pore_pressure_gradient == "symmetric"
+    # and the pore water's corrected density diffusion (opt-in), which damps its odd-even mode
+    assert scene.numerics.pore_density_diffusion == "antuono"
+    assert {"pore density gradient", "pore density diffusion"} <= {t.name for t in plan.terms}
+    assert "pore_density_gradient" in plan.fields
+    assert scene_from_file("dam_break_2d.toml").numerics.pore_density_diffusion == "none"
+    off = build_plan(sp.scene(20, 0.1, pore_diffusion="none"))
+    assert not {"pore density gradient", "pore density diffusion"} & {t.name for t in off.terms}
     default = build_plan(sp.scene(20, 0.1, pressure_gradient="symmetric"))
     assert next(t for t in default.terms if t.name == "fluid rates").pore is None
 
@@ -102,6 +110,36 @@ def test_pile_wall_mirrors_the_pore_water_velocity_across_its_faces():
     ps["x"][wall] += 1e-7  # a step's drift
     hook(sim)
     np.testing.assert_array_equal(ps["x"][wall], x)
+
+
+def test_barotropic_head_is_uniform_in_still_compressible_water():
+    """The head the case compares (barotropic_head): in a still column of the Tait water (dp/dy = -rho(p) g,
+    integrated here by RK4), y + Pi(p)/g is uniform, while y + p/gamma_w exceeds it by g d^2 / (2 c^2)
+    to first order (c = 20 m/s: 1.1 mm at d = 0.3 m, the case's base offset)."""
+    from solver.materials import tait_density
+
+    mats = build_plan(sp.scene(20, 0.1)).materials
+    k = mats.names.index("water")
+    eos = mats.rho0[k], mats.eos_b[k], mats.eos_exponent[k]
+    c = mats.sound_speed[k]
+
+    def rate(p):
+        return tait_density(p, *eos) * 9.81
+
+    y, p, dy = [0.3], [0.0], 1e-4
+    for _ in range(3000):  # down to y = 0
+        k1 = rate(p[-1])
+        k2 = rate(p[-1] + 0.5 * dy * k1)
+        k3 = rate(p[-1] + 0.5 * dy * k2)
+        k4 = rate(p[-1] + dy * k3)
+        p.append(p[-1] + dy * (k1 + 2 * k2 + 2 * k3 + k4) / 6)
+        y.append(y[-1] - dy)
+    y, p = np.array(y), np.array(p)
+    star = y + sp.barotropic_head(mats, p)
+    np.testing.assert_allclose(star, 0.3, atol=1e-9)
+    excess = (y + p / (1000.0 * 9.81)) - star
+    d = 0.3 - y
+    np.testing.assert_allclose(excess[-1], 9.81 * d[-1] ** 2 / (2 * c * c), rtol=0.02)
 
 
 def test_a_bad_pore_pressure_gradient_is_refused_naming_the_key():

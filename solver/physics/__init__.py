@@ -19,6 +19,7 @@ from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import Outlets
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
+from .seepage_pore_diffusion import PoreDensityDiffusion, PoreDensityGradient
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .tait_eos import TaitEquationOfState
@@ -35,6 +36,7 @@ TERMS = (
     TaitEquationOfState,
     HydrostaticImagePressure,
     HydrostaticReference,
+    PoreDensityGradient,  # after the reference it reads
     PorePressureAtSoil,
     SoilStressState,
     ArtificialStress,
@@ -44,6 +46,7 @@ TERMS = (
     FluidRates,
     WallFunctionShear,
     DensityDiffusionRate,
+    PoreDensityDiffusion,
     SoilRates,
     ArtificialStressForce,
     SeepageOnWater,  # before the soil side, which reads the p^ it writes
