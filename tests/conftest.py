@@ -28,6 +28,50 @@ def write_scene(tmp_path, text, name="scene.toml"):
     return path
 
 
+def water_and_sand_scene(
+    name, spacing, end_time, domain_max, gravity="[0.0, -9.81]", walls=True, youngs_modulus="1.0e6",
+    friction_angle="33.0", seepage=None,
+):  # fmt: skip
+    """The head of the two-phase test scenes (tests/test_seepage*.py, test_mpi.py) in TOML: [scene] in 2D,
+    [domain] from the origin to domain_max (TOML text, as gravity), free-slip walls on the sides and floor
+    (walls), water, a sand (n = 0.4, k = 1e-3 m/s) that a saturated block fills with pore water, and
+    numerics.seepage if given. The caller appends its blocks (rectangle_block)."""
+    wall_lines = '\n[walls]\nx_min = "free_slip"\nx_max = "free_slip"\ny_min = "free_slip"\n' if walls else ""
+    return f"""
+[scene]
+name = "{name}"
+dimension = 2
+spacing = {spacing}
+end_time = {end_time}
+gravity = {gravity}
+
+[domain]
+min = [0.0, 0.0]
+max = {domain_max}
+{wall_lines}
+[materials.water]
+model = "water"
+density = 1000.0
+typical_velocity = 2.0
+
+[materials.sand]
+model = "soil"
+density = 1590.0
+youngs_modulus = {youngs_modulus}
+poisson_ratio = 0.3
+friction_angle = {friction_angle}
+cohesion = 0.0
+porosity = 0.4
+permeability = 1.0e-3
+""" + (f'\n[numerics]\nseepage = "{seepage}"\n' if seepage is not None else "")
+
+
+def rectangle_block(name, material, lo, hi, extra=""):
+    """A [[blocks]] rectangle in TOML from lo to hi (TOML lists), then extra lines ("saturated = true")."""
+    head = f'\n[[blocks]]\nname = "{name}"\nmaterial = "{material}"\nshape = "rectangle"\n'
+    return head + f"min = {lo}\nmax = {hi}\n" + (extra + "\n" if extra else "")
+
+
 SCOURSPH = [sys.executable, "-m", "scoursph"]
 ENV = {**os.environ, "NUMBA_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
 

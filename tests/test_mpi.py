@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import roundoff
+from conftest import rectangle_block, water_and_sand_scene
 
 pytestmark = pytest.mark.mpi
 
@@ -586,53 +587,11 @@ def test_output_directory_refusal_ends_every_rank(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
 
 
-SATURATED = """
-[scene]
-name = "saturated_settling"
-dimension = 2
-spacing = 0.01
-end_time = 1.0
-gravity = [0.0, -9.81]
-
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.25]
-
-[walls]
-x_min = "free_slip"
-x_max = "free_slip"
-y_min = "free_slip"
-
-[materials.water]
-model = "water"
-density = 1000.0
-typical_velocity = 2.0
-
-[materials.sand]
-model = "soil"
-density = 1590.0
-youngs_modulus = 1.0e6
-poisson_ratio = 0.3
-friction_angle = 33.0
-cohesion = 0.0
-porosity = 0.4
-permeability = 1.0e-3
-
-[[blocks]]
-name = "bed"
-material = "sand"
-shape = "rectangle"
-min = [0.0, 0.0]
-max = [0.2, 0.1]
-saturated = true
-
-[[blocks]]
-name = "pond"
-material = "water"
-shape = "rectangle"
-min = [0.0, 0.1]
-max = [0.12, 0.2]
-"""
+SATURATED = (
+    water_and_sand_scene("saturated_settling", 0.01, 1.0, "[0.2, 0.25]")
+    + rectangle_block("bed", "sand", "[0.0, 0.0]", "[0.2, 0.1]", "saturated = true")
+    + rectangle_block("pond", "water", "[0.0, 0.1]", "[0.12, 0.2]")
+)
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,7 @@ import subprocess
 import naive_seepage
 import numpy as np
 import pytest
-from conftest import ENV, SCOURSPH, disordered_lattice, write_scene
+from conftest import ENV, SCOURSPH, disordered_lattice, rectangle_block, water_and_sand_scene, write_scene
 
 from solver.kernels import cubic_spline_normalisation
 from solver.materials import Phase
@@ -394,51 +394,20 @@ def test_corrected_pair_reads_the_lattice_normalisation_at_any_offset(offset):
         assert read[0.0][1] == pytest.approx(0.985 * grad[1], rel=1e-3)
 
 
-BOX = """
-[scene]
-name = "two_phase_box"
-dimension = 2
-spacing = 0.01
-end_time = 0.05
-gravity = [0.0, 0.0]
-
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.2]
-
-[materials.water]
-model = "water"
-density = 1000.0
-typical_velocity = 2.0
-
-[materials.sand]
-model = "soil"
-density = 1590.0
-youngs_modulus = 1.0e6
-poisson_ratio = 0.3
-friction_angle = 30.0
-cohesion = 0.0
-porosity = 0.4
-permeability = 1.0e-3
-
-[numerics]
-seepage = "{form}"
-
-[[blocks]]
-name = "bed"
-material = "sand"
-shape = "rectangle"
-min = [0.05, 0.05]
-max = [0.15, 0.15]
-saturated = true
-
-[[blocks]]
-name = "jet"
-material = "water"
-shape = "rectangle"
-min = [0.05, 0.15]
-max = [0.15, 0.19]
-"""
+BOX = (
+    water_and_sand_scene(
+        "two_phase_box",
+        0.01,
+        0.05,
+        "[0.2, 0.2]",
+        "[0.0, 0.0]",
+        walls=False,
+        friction_angle="30.0",
+        seepage="{form}",
+    )  # fmt: skip
+    + rectangle_block("bed", "sand", "[0.05, 0.05]", "[0.15, 0.15]", "saturated = true")
+    + rectangle_block("jet", "water", "[0.05, 0.15]", "[0.15, 0.19]")
+)
 
 
 @pytest.mark.parametrize("form", ["mixture", "seed"])

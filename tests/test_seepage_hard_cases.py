@@ -10,62 +10,17 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import rectangle_block, water_and_sand_scene
 
 from solver.materials import Phase
 from solver.scene import parse_scene
 from solver.simulation import Simulation
 
-JET = """
-[scene]
-name = "jet_on_bed"
-dimension = 2
-spacing = 0.005
-end_time = 0.12
-gravity = [0.0, -9.81]
-
-[domain]
-min = [0.0, 0.0]
-max = [0.2, 0.15]
-
-[walls]
-x_min = "free_slip"
-x_max = "free_slip"
-y_min = "free_slip"
-
-[materials.water]
-model = "water"
-density = 1000.0
-typical_velocity = 2.0
-
-[materials.sand]
-model = "soil"
-density = 1590.0
-youngs_modulus = 5.0e6
-poisson_ratio = 0.3
-friction_angle = 33.0
-cohesion = 0.0
-porosity = 0.4
-permeability = 1.0e-3
-
-[numerics]
-seepage = "{form}"
-
-[[blocks]]
-name = "bed"
-material = "sand"
-shape = "rectangle"
-min = [0.0, 0.0]
-max = [0.2, 0.05]
-geostatic = true
-saturated = {saturated}
-
-[[blocks]]
-name = "jet"
-material = "water"
-shape = "rectangle"
-min = [0.08, 0.07]
-max = [0.12, 0.13]
-"""
+JET = (
+    water_and_sand_scene("jet_on_bed", 0.005, 0.12, "[0.2, 0.15]", youngs_modulus="5.0e6", seepage="{form}")
+    + rectangle_block("bed", "sand", "[0.0, 0.0]", "[0.2, 0.05]", "geostatic = true\nsaturated = {saturated}")
+    + rectangle_block("jet", "water", "[0.08, 0.07]", "[0.12, 0.13]")
+)
 T_END = 0.12
 JET_SPEED = 1.0
 BED_TOP = 0.05

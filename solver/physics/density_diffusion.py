@@ -119,6 +119,32 @@ def density_diffusion(
         drho[i] += delta * h * sound_speed[material[i]] * acc
 
 
+@kernel
+def renormalised_solve(m00, m01, m02, m11, m12, m22, u0, u1, u2, is3d):
+    """M^-1 u for the symmetric moment matrix M = sum_j x_ji (x) grad_i W_ij V_j (Antuono et al. 2010, eq. 8),
+    by cofactors; (0, 0, 0) where M is singular (an isolated particle). In 2D (is3d None) m02, m12, m22, u2
+    are unused and the third component is 0. Shared by the water's and the pore water's gradients."""
+    if is3d is not None:
+        c00 = m11 * m22 - m12 * m12
+        c01 = m02 * m12 - m01 * m22
+        c02 = m01 * m12 - m02 * m11
+        det = m00 * c00 + m01 * c01 + m02 * c02
+        if abs(det) > 1e-300:
+            c11 = m00 * m22 - m02 * m02
+            c12 = m01 * m02 - m00 * m12
+            c22 = m00 * m11 - m01 * m01
+            return (
+                (c00 * u0 + c01 * u1 + c02 * u2) / det,
+                (c01 * u0 + c11 * u1 + c12 * u2) / det,
+                (c02 * u0 + c12 * u1 + c22 * u2) / det,
+            )
+        return 0.0, 0.0, 0.0
+    det = m00 * m11 - m01 * m01
+    if abs(det) > 1e-300:
+        return (m11 * u0 - m01 * u1) / det, (m00 * u1 - m01 * u0) / det, 0.0
+    return 0.0, 0.0, 0.0
+
+
 @kernel(parallel=True)
 def renormalised_density_gradient(targets, start, index, x, rho, mass, h, norm, grad_rho, is3d=None):
     """<grad rho>_i^L = sum_j (rho_j - rho_i) L_i grad_i W_ij V_j, L_i = [sum_j x_ji (x) grad_i W_ij V_j]^-1
@@ -155,27 +181,11 @@ def renormalised_density_gradient(targets, start, index, x, rho, mass, h, norm, 
                 m12 -= fv * d1 * d2
                 m22 -= fv * d2 * d2
                 u2 += dr * fv * d2
+        grad_rho[i, 0], grad_rho[i, 1], g2 = renormalised_solve(
+            m00, m01, m02, m11, m12, m22, u0, u1, u2, is3d
+        )
         if is3d is not None:
-            c00 = m11 * m22 - m12 * m12
-            c01 = m02 * m12 - m01 * m22
-            c02 = m01 * m12 - m02 * m11
-            det = m00 * c00 + m01 * c01 + m02 * c02
-            if abs(det) > 1e-300:
-                c11 = m00 * m22 - m02 * m02
-                c12 = m01 * m02 - m00 * m12
-                c22 = m00 * m11 - m01 * m01
-                grad_rho[i, 0] = (c00 * u0 + c01 * u1 + c02 * u2) / det
-                grad_rho[i, 1] = (c01 * u0 + c11 * u1 + c12 * u2) / det
-                grad_rho[i, 2] = (c02 * u0 + c12 * u1 + c22 * u2) / det
-            else:
-                grad_rho[i, 0] = grad_rho[i, 1] = grad_rho[i, 2] = 0.0
-        else:
-            det = m00 * m11 - m01 * m01
-            if abs(det) > 1e-300:
-                grad_rho[i, 0] = (m11 * u0 - m01 * u1) / det
-                grad_rho[i, 1] = (m00 * u1 - m01 * u0) / det
-            else:
-                grad_rho[i, 0] = grad_rho[i, 1] = 0.0
+            grad_rho[i, 2] = g2
 
 
 @kernel(parallel=True)

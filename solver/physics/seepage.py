@@ -631,6 +631,12 @@ class _Coupling(Term):
 
     stage = Stage.RATES
 
+    @classmethod
+    def build(cls, scene, materials):
+        """Both sides run whenever the scene has seepage (SeepageSettings.of)."""
+        settings = SeepageSettings.of(scene, materials)
+        return cls(settings) if settings is not None else None
+
     def __init__(self, settings: SeepageSettings):
         super().__init__()
         self.settings = settings
@@ -675,11 +681,6 @@ class SeepageOnWater(_Coupling):
     name = "seepage on water"
     targets = Phase.WATER
     neighbours = Phase.SOIL
-
-    @classmethod
-    def build(cls, scene, materials):
-        settings = SeepageSettings.of(scene, materials)
-        return cls(settings) if settings is not None else None
 
     def __init__(self, settings):
         super().__init__(settings)
@@ -726,11 +727,6 @@ class SeepageOnSoil(_Coupling):
     name = "seepage on soil"
     targets = Phase.SOIL
     neighbours = Phase.WATER
-
-    @classmethod
-    def build(cls, scene, materials):
-        settings = SeepageSettings.of(scene, materials)
-        return cls(settings) if settings is not None else None
 
     def __init__(self, settings):
         super().__init__(settings)

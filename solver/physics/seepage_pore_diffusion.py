@@ -46,7 +46,7 @@ from ..materials import Phase
 from ..particles import FieldSpec, Mirror
 from ..scene import DensityDiffusion
 from ..term import Equation, Stage, Term
-from .density_diffusion import pore_field
+from .density_diffusion import pore_field, renormalised_solve
 from .fixed_particles import FIXED
 
 
@@ -109,23 +109,9 @@ def pore_density_gradient(targets, start, index, x, rho, mass, fraction, h, norm
                 m12 -= fv * d1 * d2
                 m22 -= fv * d2 * d2
                 u2 += dq * fv * d2
+        grad[i, 0], grad[i, 1], g2 = renormalised_solve(m00, m01, m02, m11, m12, m22, u0, u1, u2, is3d)
         if is3d is not None:
-            c00 = m11 * m22 - m12 * m12
-            c01 = m02 * m12 - m01 * m22
-            c02 = m01 * m12 - m02 * m11
-            det = m00 * c00 + m01 * c01 + m02 * c02
-            if abs(det) > 1e-300:
-                c11 = m00 * m22 - m02 * m02
-                c12 = m01 * m02 - m00 * m12
-                c22 = m00 * m11 - m01 * m01
-                grad[i, 0] = (c00 * u0 + c01 * u1 + c02 * u2) / det
-                grad[i, 1] = (c01 * u0 + c11 * u1 + c12 * u2) / det
-                grad[i, 2] = (c02 * u0 + c12 * u1 + c22 * u2) / det
-        else:
-            det = m00 * m11 - m01 * m01
-            if abs(det) > 1e-300:
-                grad[i, 0] = (m11 * u0 - m01 * u1) / det
-                grad[i, 1] = (m00 * u1 - m01 * u0) / det
+            grad[i, 2] = g2
 
 
 @kernel(parallel=True)
