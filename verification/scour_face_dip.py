@@ -230,7 +230,7 @@ def _switch_off(variant):
         bodies.BodyImages.prune = lambda self, particles, lists, first: lists
 
 
-def pond(dx=0.005, end_time=1.0, variant=None, resume=False):
+def pond(dx=0.005, end_time=1.0, variant=None, resume=False, label=""):
     import os
     import resource
 
@@ -239,7 +239,8 @@ def pond(dx=0.005, end_time=1.0, variant=None, resume=False):
 
     if variant:
         _switch_off(variant)
-    out = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else ""))
+    name = f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else "") + (f"_{label}" if label else "")
+    out = POND_RUNS / name
     load0 = os.getloadavg()[0]
     c0, w0 = time.process_time(), time.perf_counter()
     scene = parse_scene(pond_raw(dx, end_time), SCENES / "scour_saturated.toml")
@@ -342,6 +343,7 @@ def main(argv=None):
     c.add_argument("--dx", type=float, default=0.005)
     c.add_argument("--without", choices=VARIANTS, help="experiment: switch this part of the body images off")
     c.add_argument("--continue", dest="resume", action="store_true", help="extend the pond run to --end")
+    c.add_argument("--label", default="", help="a suffix of the run's name (keeps earlier runs)")
     d = sub.add_parser("compare")
     d.add_argument("case")
     d.add_argument("--at", type=float, default=1.0)
@@ -352,7 +354,8 @@ def main(argv=None):
         _write(f"near_{args.case}", near(args.case, args.t_from, args.t_to))
     elif args.cmd == "pond":
         tag = f"pond_dx{args.dx * 1000:g}mm" + (f"_{args.without}" if args.without else "")
-        result = pond(args.dx, args.end, args.without, args.resume)
+        tag += f"_{args.label}" if args.label else ""
+        result = pond(args.dx, args.end, args.without, args.resume, args.label)
         _write(tag + (f"_to{args.end:g}s" if args.resume else ""), result)
     elif args.cmd == "compare":
         _write(f"compare_{args.case}_pond_{args.at:g}s", compare(args.case, args.at))
