@@ -5,8 +5,11 @@ In the saturated study runs a dip forms at x = 0.0175 m beside a bulge against t
 (x = 0.0025 m); at q = 0.09 it is the deepest point at 2 s (0.64 mm). The first study's defect was
 there: the images of the overflow above the crown, mirrored across the crown's line or through its
 corner (0, 0.105), reached the pore water below the crown and compressed it (docs/scour_study.md,
-"What was wrong"); prune_behind_mirrors (solver/physics/bodies.py) removes the pairs that see an
-image from behind its mirror line. Three looks:
+"What was wrong"); prune_behind_mirrors (solver/physics/bodies.py) removed the pairs that see an
+image from behind its mirror line. That rule drove a current at the convex corners in still water;
+corner9 replaced it by prune_to_own_region (each particle sees only the images of its own edge
+strip or corner wedge). `images` replays the old rule (the runs it was written for); `pond --label`
+keeps a run of another solver beside the old one. Three looks:
 
   images   from a study run's HDF5 series: at every output time, the caisson's corner and crown
            images of the water (the solver's own rules: BodyGeometry, the corner's wedge, the
@@ -25,6 +28,7 @@ image from behind its mirror line. Three looks:
     python -m verification.scour_face_dip images saturated_q0.09_dx5mm
     python -m verification.scour_face_dip near saturated_q0.09_dx5mm --from 0.5 --to 2.0
     nice -n 10 python -m verification.scour_face_dip pond --end 1.0      # runs/scour_face_dip/pond_dx5mm
+    nice -n 10 python -m verification.scour_face_dip pond --end 0.5 --label corner9   # ..._corner9
     nice -n 10 python -m verification.scour_face_dip pond --end 0.1 --without no_corner_images   # experiment
     python -m verification.scour_face_dip compare saturated_q0.09_dx5mm --at 1.0
 
