@@ -296,10 +296,10 @@ def _profile_at(run, t):
     return x, z[:, k] - z[:, 0], float(ts[k])
 
 
-def compare(case, at=1.0, dx=0.005):
+def compare(case, at=1.0, dx=0.005, pond_label=""):
     """The surface change beside the face (x < NEAR) and the top rows' horizontal displacement, the
-    flowing run against the still pond, at time `at`."""
-    pond_run = POND_RUNS / f"pond_dx{dx * 1000:g}mm"
+    flowing run against the still pond (the run `pond --label pond_label` made), at time `at`."""
+    pond_run = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{pond_label}" if pond_label else ""))
     out = {"case": case, "at_s": at}
     for label, run, root in (("flow", RUNS / case, RUNS), ("pond", pond_run, POND_RUNS)):
         x, dz, t = _profile_at(run, at)
@@ -351,6 +351,7 @@ def main(argv=None):
     d = sub.add_parser("compare")
     d.add_argument("case")
     d.add_argument("--at", type=float, default=1.0)
+    d.add_argument("--pond-label", default="", help="compare with the pond run of this --label")
     args = ap.parse_args(argv)
     if args.cmd == "images":
         _write(f"images_{args.case}", images(args.case, args.t_from))
@@ -362,7 +363,9 @@ def main(argv=None):
         result = pond(args.dx, args.end, args.without, args.resume, args.label)
         _write(tag + (f"_to{args.end:g}s" if args.resume else ""), result)
     elif args.cmd == "compare":
-        _write(f"compare_{args.case}_pond_{args.at:g}s", compare(args.case, args.at))
+        other = "pond" + (f"_{args.pond_label}" if args.pond_label else "")
+        tag = f"compare_{args.case}_{other}_{args.at:g}s"
+        _write(tag, compare(args.case, args.at, pond_label=args.pond_label))
     return 0
 
 
