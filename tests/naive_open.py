@@ -52,16 +52,41 @@ def in_boxes(x, lo, hi):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def prune_behind_mirrors(targets, start, index, x, first, src):
-    """Twin of bodies.prune_behind_mirrors: the neighbour rows kept per target, as lists."""
+def _on_strip(p, a, b, n):
+    """In front of edge (a, b) with the foot on it."""
+    t = (b - a) / np.linalg.norm(b - a)
+    return (p - a) @ n >= 0.0 and 0.0 <= (p - a) @ t <= np.linalg.norm(b - a)
+
+
+def _nearest_is_vertex(p, v, edges):
+    """The point of the (convex) polygon's boundary nearest to p is the vertex v: p is in the wedge
+    outside v."""
+    best = np.inf
+    for a, b, _ in edges:
+        t = b - a
+        s = np.clip((p - a) @ t / (t @ t), 0.0, 1.0)
+        best = min(best, np.linalg.norm(p - (a + s * t)))
+    return np.isclose(np.linalg.norm(p - v), best, rtol=1e-12, atol=0.0) and not any(
+        _on_strip(p, a, b, n) for a, b, n in edges
+    )
+
+
+def prune_to_own_region(targets, start, index, x, first, tag, edges, convex_vertices):
+    """Twin of bodies.prune_to_own_region: the neighbour rows kept per target, as lists. A pair
+    (target, image) is kept if the target is where the image's mirror applies: on the strip in front
+    of the image's edge (tag >= 0), or nearest to the image's convex vertex (tag -1 - c)."""
     kept = []
     for t, i in enumerate(targets):
         row = []
         for j in index[start[t] : start[t + 1]]:
             k = j - first
-            if 0 <= k < len(src):
-                s = x[src[k]]
-                if np.dot(x[i] - 0.5 * (s + x[j]), s - x[j]) <= 0.0:
+            if 0 <= k < len(tag):
+                g = tag[k]
+                if g >= 0:
+                    ok = _on_strip(x[i], *edges[g])
+                else:
+                    ok = _nearest_is_vertex(x[i], convex_vertices[-1 - g], edges)
+                if not ok:
                     continue
             row.append(int(j))
         kept.append(row)

@@ -5,8 +5,11 @@ In the saturated study runs a dip forms at x = 0.0175 m beside a bulge against t
 (x = 0.0025 m); at q = 0.09 it is the deepest point at 2 s (0.64 mm). The first study's defect was
 there: the images of the overflow above the crown, mirrored across the crown's line or through its
 corner (0, 0.105), reached the pore water below the crown and compressed it (docs/scour_study.md,
-"What was wrong"); prune_behind_mirrors (solver/physics/bodies.py) removes the pairs that see an
-image from behind its mirror line. Three looks:
+"What was wrong"); prune_behind_mirrors (solver/physics/bodies.py) removed the pairs that see an
+image from behind its mirror line. That rule drove a current at the convex corners in still water;
+corner9 replaced it by prune_to_own_region (each particle sees only the images of its own edge
+strip or corner wedge). `images` replays the old rule (the runs it was written for); `pond --label`
+keeps a run of another solver beside the old one. Three looks:
 
   images   from a study run's HDF5 series: at every output time, the caisson's corner and crown
            images of the water (the solver's own rules: BodyGeometry, the corner's wedge, the
@@ -25,6 +28,7 @@ image from behind its mirror line. Three looks:
     python -m verification.scour_face_dip images saturated_q0.09_dx5mm
     python -m verification.scour_face_dip near saturated_q0.09_dx5mm --from 0.5 --to 2.0
     nice -n 10 python -m verification.scour_face_dip pond --end 1.0      # runs/scour_face_dip/pond_dx5mm
+    nice -n 10 python -m verification.scour_face_dip pond --end 0.5 --label corner9   # ..._corner9
     nice -n 10 python -m verification.scour_face_dip pond --end 0.1 --without no_corner_images   # experiment
     python -m verification.scour_face_dip compare saturated_q0.09_dx5mm --at 1.0
 
@@ -230,7 +234,7 @@ def _switch_off(variant):
         bodies.BodyImages.prune = lambda self, particles, lists, first: lists
 
 
-def pond(dx=0.005, end_time=1.0, variant=None, resume=False):
+def pond(dx=0.005, end_time=1.0, variant=None, resume=False, label=""):
     import os
     import resource
 
@@ -239,7 +243,8 @@ def pond(dx=0.005, end_time=1.0, variant=None, resume=False):
 
     if variant:
         _switch_off(variant)
-    out = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else ""))
+    name = f"pond_dx{dx * 1000:g}mm" + (f"_{variant}" if variant else "") + (f"_{label}" if label else "")
+    out = POND_RUNS / name
     load0 = os.getloadavg()[0]
     c0, w0 = time.process_time(), time.perf_counter()
     scene = parse_scene(pond_raw(dx, end_time), SCENES / "scour_saturated.toml")
@@ -291,10 +296,10 @@ def _profile_at(run, t):
     return x, z[:, k] - z[:, 0], float(ts[k])
 
 
-def compare(case, at=1.0, dx=0.005):
+def compare(case, at=1.0, dx=0.005, pond_label=""):
     """The surface change beside the face (x < NEAR) and the top rows' horizontal displacement, the
-    flowing run against the still pond, at time `at`."""
-    pond_run = POND_RUNS / f"pond_dx{dx * 1000:g}mm"
+    flowing run against the still pond (the run `pond --label pond_label` made), at time `at`."""
+    pond_run = POND_RUNS / (f"pond_dx{dx * 1000:g}mm" + (f"_{pond_label}" if pond_label else ""))
     out = {"case": case, "at_s": at}
     for label, run, root in (("flow", RUNS / case, RUNS), ("pond", pond_run, POND_RUNS)):
         x, dz, t = _profile_at(run, at)
@@ -342,9 +347,11 @@ def main(argv=None):
     c.add_argument("--dx", type=float, default=0.005)
     c.add_argument("--without", choices=VARIANTS, help="experiment: switch this part of the body images off")
     c.add_argument("--continue", dest="resume", action="store_true", help="extend the pond run to --end")
+    c.add_argument("--label", default="", help="a suffix of the run's name (keeps earlier runs)")
     d = sub.add_parser("compare")
     d.add_argument("case")
     d.add_argument("--at", type=float, default=1.0)
+    d.add_argument("--pond-label", default="", help="compare with the pond run of this --label")
     args = ap.parse_args(argv)
     if args.cmd == "images":
         _write(f"images_{args.case}", images(args.case, args.t_from))
@@ -352,10 +359,13 @@ def main(argv=None):
         _write(f"near_{args.case}", near(args.case, args.t_from, args.t_to))
     elif args.cmd == "pond":
         tag = f"pond_dx{args.dx * 1000:g}mm" + (f"_{args.without}" if args.without else "")
-        result = pond(args.dx, args.end, args.without, args.resume)
+        tag += f"_{args.label}" if args.label else ""
+        result = pond(args.dx, args.end, args.without, args.resume, args.label)
         _write(tag + (f"_to{args.end:g}s" if args.resume else ""), result)
     elif args.cmd == "compare":
-        _write(f"compare_{args.case}_pond_{args.at:g}s", compare(args.case, args.at))
+        other = "pond" + (f"_{args.pond_label}" if args.pond_label else "")
+        tag = f"compare_{args.case}_{other}_{args.at:g}s"
+        _write(tag, compare(args.case, args.at, pond_label=args.pond_label))
     return 0
 
 

@@ -22,6 +22,22 @@ velocity reversed, tangential kept). Without it a jet aimed at a corner (a squar
 degrees) drove particles into the body (tests/test_bodies.py). At a concave vertex between a body
 and a box wall the corner image (the image of an image) is missing.
 
+Who sees which image. Each image carries the region that made it (its tag: an edge's strip or a
+convex vertex's wedge), and a particle sees an image only if it lies in that same region itself
+(prune_to_own_region, once per neighbour-list rebuild): it sees the body through one mirror, the
+one of the edge it faces or of the corner whose wedge it is in. This is the principle of the
+multiple boundary tangent method (Yildiz, Rook & Suleman 2009, Int. J. Numer. Meth. Engng 77,
+1416-1438: each particle mirrors its neighbours across the tangent at its own nearest boundary
+point), kept here with images made once per source. Near a convex corner each of the three
+regions' image sets fills the body's inside once over (edge strip: a mirror of that strip; wedge:
+a point mirror of the wedge), so every particle there sees the body filled once. Two earlier rules
+failed: with every pair kept, a particle in the wedge saw the body three times over (both edges'
+images and the vertex's); dropping only the pairs whose target lies behind the image's mirror line
+(the fix of the overflow's images compressing the pore water under the caisson's crown,
+docs/scour_study.md) left one-sided image sets beside the corner, and still water there ran at up
+to 0.4 m/s (tests/test_bodies.py::test_still_water_stays_still_beside_a_convex_body_corner). The
+region rule still drops those crown pairs: pore water beside the face faces the face, not the crown.
+
 Repulsion backstop. As at the box walls (wall_repulsion.py), the image force vanishes as a particle
 reaches the wall (dW/dr = 0 at r = 0), so a jet drove particles through the edges (the strict xfails
 of tests/test_bodies.py): each edge and convex vertex also carries Monaghan's (1994) Lennard-Jones
@@ -87,9 +103,10 @@ class BodyGeometry:
 
 
 @kernel
-def find_body_images(x, n_local, reach, ea, et, en, elen, cv, cin, cout, src, rot, off):
+def find_body_images(x, n_local, reach, ea, et, en, elen, cv, cin, cout, src, rot, off, tag):
     """Images of local rows across body edges and round convex corners (fill when the tables are
-    big enough); returns the count."""
+    big enough); returns the count. tag: the region that made the image, edge e >= 0 or convex
+    vertex c as -1 - c (prune_to_own_region)."""
     cap = src.shape[0]
     m = 0
     for i in range(n_local):
@@ -111,6 +128,7 @@ def find_body_images(x, n_local, reach, ea, et, en, elen, cv, cin, cout, src, ro
                 # x' = 2 v - x = R x + o
                 off[m, 0] = 2.0 * cv[c, 0] - x[i, 0] - (rot[m, 0, 0] * x[i, 0] + rot[m, 0, 1] * x[i, 1])
                 off[m, 1] = 2.0 * cv[c, 1] - x[i, 1] - (rot[m, 1, 0] * x[i, 0] + rot[m, 1, 1] * x[i, 1])
+                tag[m] = -1 - c
             m += 1
         for e in range(ea.shape[0]):
             r0 = x[i, 0] - ea[e, 0]
@@ -131,6 +149,7 @@ def find_body_images(x, n_local, reach, ea, et, en, elen, cv, cin, cout, src, ro
                 c = 2.0 * (ea[e, 0] * n0 + ea[e, 1] * n1)
                 off[m, 0] = c * n0
                 off[m, 1] = c * n1
+                tag[m] = e
             m += 1
     return m
 
@@ -238,12 +257,28 @@ def guard_bodies(n, x, v, v_half, verts, starts, ea, et, en, elen, ebody, fix):
 
 
 @kernel
-def prune_behind_mirrors(targets, start, index, x, first, src, new_start, new_index):
-    """Drop from a neighbour list every pair (target i, body image k) whose target lies behind the
-    image's mirror line, (x_i - m) . (x_s - x_k) <= 0 with x_s the image's source and m the midpoint
-    (the mirror line is the perpendicular bisector of x_s and x_k). Returns the pairs kept; with
-    new_index of length 0 it only counts them (new_start filled either way)."""
-    n_img = src.shape[0]
+def in_image_region(px, py, tag, ea, et, en, elen, cv, cin, cout):
+    """Whether the point lies where find_body_images would mirror it by the rule `tag` (reach aside):
+    in front of edge e with its foot on the edge (tag e >= 0), or in the wedge outside convex
+    vertex c (tag -1 - c)."""
+    if tag >= 0:
+        r0, r1 = px - ea[tag, 0], py - ea[tag, 1]
+        foot = r0 * et[tag, 0] + r1 * et[tag, 1]
+        return r0 * en[tag, 0] + r1 * en[tag, 1] >= 0.0 and 0.0 <= foot <= elen[tag]
+    c = -1 - tag
+    r0, r1 = px - cv[c, 0], py - cv[c, 1]
+    return r0 * cin[c, 0] + r1 * cin[c, 1] > 0.0 and r0 * cout[c, 0] + r1 * cout[c, 1] < 0.0
+
+
+@kernel
+def prune_to_own_region(targets, start, index, x, first, tag, ea, et, en, elen, cv, cin, cout,
+                        new_start, new_index):  # fmt: skip
+    """Keep a pair (target i, body image k) only if the target lies in the region whose mirror made
+    the image (in_image_region with the image's tag): each target sees the body through one mirror,
+    that of the edge it faces or of the corner whose wedge it is in, so the body's inside is filled
+    once. Returns the pairs kept; with new_index of length 0 it only counts them (new_start filled
+    either way)."""
+    n_img = tag.shape[0]
     fill = new_index.shape[0] > 0
     m = 0
     new_start[0] = 0
@@ -253,11 +288,7 @@ def prune_behind_mirrors(targets, start, index, x, first, src, new_start, new_in
             j = index[s]
             k = j - first
             if 0 <= k < n_img:
-                a = src[k]
-                side = 0.0
-                for d in range(x.shape[1]):
-                    side += (x[i, d] - 0.5 * (x[a, d] + x[j, d])) * (x[a, d] - x[j, d])
-                if side <= 0.0:
+                if not in_image_region(x[i, 0], x[i, 1], tag[k], ea, et, en, elen, cv, cin, cout):
                     continue
             if fill:
                 new_index[m] = j
@@ -275,6 +306,7 @@ class BodyImages:
         self.src = np.zeros(0, dtype=np.int64)
         self.rot = np.zeros((0, 2, 2))
         self.off = np.zeros((0, 2))
+        self.tag = np.zeros(0, dtype=np.int64)  # the edge (>= 0) or convex vertex (-1 - c) that made it
         self.n = 0
 
     def rebuild(self, particles, first, box=None):
@@ -285,10 +317,10 @@ class BodyImages:
         g = self.geo
         tables = (g.a, g.t, g.n, g.length, g.corner, g.t_in, g.t_out)
         args = (particles["x"], particles.n_local, self.reach) + tables
-        n = find_body_images(*args, self.src[:0], self.rot[:0], self.off[:0])
+        n = find_body_images(*args, self.src[:0], self.rot[:0], self.off[:0], self.tag[:0])
         self._room(n, 0)
         if n:
-            find_body_images(*args, self.src, self.rot, self.off)
+            find_body_images(*args, self.src, self.rot, self.off, self.tag)
         if box is not None and n:
             n = self._box_corners(particles["x"], n, *box)
         self.n = n
@@ -300,15 +332,16 @@ class BodyImages:
         if m <= len(self.src):
             return
         size = int(m * 1.25) + 16
-        for name in ("src", "rot", "off"):
+        for name in ("src", "rot", "off", "tag"):
             old = getattr(self, name)
             new = np.zeros((size,) + old.shape[1:], dtype=old.dtype)
             new[:keep] = old[:keep]
             setattr(self, name, new)
 
     def _box_corners(self, x, n, has_lo, lo, has_hi, hi):
-        """Append, for each body image within reach of a box wall, its mirror across that wall."""
-        src, rot, off = self.src[:n].copy(), self.rot[:n].copy(), self.off[:n].copy()
+        """Append, for each body image within reach of a box wall, its mirror across that wall (seen by
+        the targets in the region that made the body image: its tag)."""
+        src, rot, off, tag = (getattr(self, name)[:n].copy() for name in ("src", "rot", "off", "tag"))
         pos = np.einsum("kab,kb->ka", rot, x[src]) + off
         extra = []
         for a in range(2):
@@ -323,34 +356,34 @@ class BodyImages:
                 flip[a] = -1.0
                 shift = np.zeros(2)
                 shift[a] = 2.0 * plane
-                extra.append((src[k], flip[None, :, None] * rot[k], flip * off[k] + shift))
+                extra.append((src[k], flip[None, :, None] * rot[k], flip * off[k] + shift, tag[k]))
         m = n + sum(len(e[0]) for e in extra)
         self._room(m, n)
-        for s_, r_, o_ in extra:
+        for s_, r_, o_, g_ in extra:
             k = len(s_)
             self.src[n : n + k], self.rot[n : n + k], self.off[n : n + k] = s_, r_, o_
+            self.tag[n : n + k] = g_
             n += k
         return n
 
     def prune(self, particles, lists, first):
-        """Neighbour lists without the pairs that see a body image from behind its mirror line
-        (prune_behind_mirrors). An image mirrored across an edge's line, or through a convex
-        vertex, is closer than its source to a particle on the far side of that line, e.g. the
-        particles along a caisson's face below its crown see the images of the overflow above the
-        crown (the mirrors across the crown's line) inside the body; they compressed the pore water
-        under the crown at every rebuild and lifted the soil there (docs/scour_study.md)."""
+        """Neighbour lists in which each target sees only the images made by the mirror of its own
+        region (prune_to_own_region): the edge it faces, or the convex corner whose wedge it is in."""
         if self.n == 0:
             return lists
-        x, src = particles["x"], self.src[: self.n]
+        g = self.geo
+        x, tag = particles["x"], self.tag[: self.n]
+        tables = (g.a, g.t, g.n, g.length, g.corner, g.t_in, g.t_out)
         out = {}
         for key, nl in lists.items():
             new_start = np.zeros(len(nl.targets) + 1, dtype=np.int64)
-            m = prune_behind_mirrors(nl.targets, nl.start, nl.index, x, first, src, new_start, nl.index[:0])
+            args = (nl.targets, nl.start, nl.index, x, first, tag) + tables
+            m = prune_to_own_region(*args, new_start, nl.index[:0])
             if m == len(nl.index):
                 out[key] = nl
                 continue
             new_index = np.empty(m, dtype=nl.index.dtype)
-            prune_behind_mirrors(nl.targets, nl.start, nl.index, x, first, src, new_start, new_index)
+            prune_to_own_region(*args, new_start, new_index)
             out[key] = type(nl)(nl.targets, new_start, new_index)
         return out
 
@@ -393,6 +426,10 @@ class BodyGuard(Term):
             Equation(
                 "image particles across polygon edges, x' = R x + o, v' = R v, T' = R T R^T",
                 "seed sec. 2.5, eq. (23) rotated; Libersky et al. (1993)",
+            ),
+            Equation(
+                "a particle sees only the images of its own region (edge strip or corner wedge)",
+                "multiple boundary tangent principle, Yildiz, Rook & Suleman (2009)",
             ),
             Equation("particles inside a body counted (leaks) and reflected out", "this project"),
         )
