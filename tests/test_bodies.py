@@ -25,6 +25,7 @@ from solver.physics.body_repulsion import body_repulsion
 from solver.physics.outlet import Outlets, in_boxes
 from solver.scene import load_scene, parse_scene
 from solver.simulation import Simulation
+from verification import body_corner_rules
 
 ROOT = Path(__file__).resolve().parents[1]
 DIAMOND = [[0.10, 0.02], [0.14, 0.06], [0.10, 0.10], [0.06, 0.06]]  # a square turned 45 degrees
@@ -338,45 +339,7 @@ def test_soil_slides_down_a_frictionless_ramp_at_g_sin_theta():
     assert not naive_open.inside_polygon(ps["x"][:n], np.array([[0.0, 0.0], [0.3, 0.0], [0.0, 0.15]])).any()
 
 
-CORNER_POND = """
-[scene]
-name = "corner_pond"
-dimension = 2
-spacing = 0.005
-end_time = 0.1
-gravity = [0.0, -9.81]
-
-[domain]
-min = [-0.04, 0.0]
-max = [0.06, 0.12]
-
-[walls]
-x_min = "free_slip"
-x_max = "free_slip"
-y_min = "free_slip"
-
-[materials.water]
-model = "water"
-density = 1000.0
-typical_velocity = 2.5         # the scour scenes' (c = 25 m/s)
-
-[[bodies]]
-name = "caisson"               # its landward corner (0, 0.04) is convex, under 0.04 m of water
-vertices = [[-0.04, 0.0], [0.0, 0.0], [0.0, 0.04], [-0.04, 0.04]]
-
-[[blocks]]
-name = "pond"
-material = "water"
-shape = "polygon"
-vertices = [[-0.04, 0.04], [0.0, 0.04], [0.0, 0.0], [0.06, 0.0], [0.06, 0.08], [-0.04, 0.08]]
-hydrostatic = true
-
-[output]
-interval = 1.0
-fields = ["velocity"]
-vtk = false
-render = false
-"""
+CORNER_POND = body_corner_rules.POND  # a still pond over a caisson's convex landward corner
 
 
 def test_still_water_stays_still_beside_a_convex_body_corner():

@@ -59,10 +59,10 @@ y_min = "free_slip"
 [materials.water]
 model = "water"
 density = 1000.0
-typical_velocity = 2.5
+typical_velocity = 2.5         # the scour scenes' (c = 25 m/s)
 
 [[bodies]]
-name = "caisson"
+name = "caisson"               # its landward corner (0, 0.04) is convex, under 0.04 m of water
 vertices = [[-0.04, 0.0], [0.0, 0.0], [0.0, 0.04], [-0.04, 0.04]]
 
 [[blocks]]
