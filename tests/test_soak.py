@@ -24,3 +24,21 @@ def test_soak_ci_size(tmp_path):
     assert res.snapshots == res.expected_snapshots == 331
     assert res.growth < soak.GROWTH_LIMIT, (res.rss_warm_mb, res.rss_max_mb)
     assert res.fd_last <= res.fd_first, (res.fd_first, res.fd_last)
+
+
+def _judged(fds):
+    """soak._judge on synthetic samples (wall s, rss kB, fds, snapshots written), all after warm-up."""
+    res = soak.SoakResult(spacing=0.01, end_time=1.0, expected_snapshots=10)
+    res.samples = [(0.5 * k, 1000, n, 10) for k, n in enumerate(fds)]
+    soak._judge(res)
+    return res
+
+
+def test_fd_check_sees_a_leak_and_not_a_file_open_during_a_write():
+    """A leaked handle stays open and raises the floor of the count (one more per 5 samples here:
+    fails); a file open during a write shows in single samples wherever they fall (here only in the
+    last quarter: passes). The largest-count rule this replaced failed on exactly that transient."""
+    leak = _judged([3 + k // 5 for k in range(40)])
+    assert leak.fd_last > leak.fd_first
+    transient = _judged([3] * 30 + [3, 4, 3, 3, 4, 3, 3, 3, 4, 3])
+    assert transient.fd_last <= transient.fd_first
