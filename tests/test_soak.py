@@ -23,7 +23,7 @@ def test_soak_ci_size(tmp_path):
     assert res.read_ok, res.read_error
     assert res.snapshots == res.expected_snapshots == 331
     assert res.growth < soak.GROWTH_LIMIT, (res.rss_warm_mb, res.rss_max_mb)
-    assert res.fd_last <= res.fd_first, (res.fd_first, res.fd_last)
+    assert res.fd_last <= res.fd_first, (res.fd_first, res.fd_last, res.fd_targets_last)
 
 
 def _judged(fds):
@@ -42,3 +42,20 @@ def test_fd_check_sees_a_leak_and_not_a_file_open_during_a_write():
     assert leak.fd_last > leak.fd_first
     transient = _judged([3] * 30 + [3, 4, 3, 3, 4, 3, 3, 3, 4, 3])
     assert transient.fd_last <= transient.fd_first
+
+
+def test_open_files_leaves_out_a_write_in_progress_and_counts_a_leaked_handle(tmp_path):
+    """The fd count of the soak, on this process: a file open under its temporary write name is not
+    counted; the same handle after the rename is (a leaked handle outlives its write)."""
+    import os
+
+    from solver.output.atomic import partial_path
+
+    final = tmp_path / "particles.h5"
+    before = len(soak.open_files(os.getpid()))
+    with open(partial_path(final), "w") as fh:
+        assert len(soak.open_files(os.getpid())) == before
+        os.replace(partial_path(final), final)
+        assert len(soak.open_files(os.getpid())) == before + 1
+        assert str(final) in soak.open_files(os.getpid())
+        fh.write("x")

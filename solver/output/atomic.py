@@ -4,13 +4,22 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 from pathlib import Path
+
+# the name partial_path gives: a hidden file ".<stem>.partial<suffix>"
+PARTIAL_NAME = re.compile(r"\..+\.partial(\.[A-Za-z0-9]+)?")
 
 
 def partial_path(path) -> Path:
     """The temporary name beside `path` that a write goes to before the rename."""
     path = Path(path)
     return path.with_name(f".{path.stem}.partial{path.suffix}")
+
+
+def is_partial(path) -> bool:
+    """True for a file still under the temporary name of a write in progress (or a crashed one)."""
+    return PARTIAL_NAME.fullmatch(Path(path).name) is not None
 
 
 def commit(tmp, path):

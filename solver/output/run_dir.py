@@ -24,7 +24,7 @@ import re
 from pathlib import Path
 
 from .. import __version__
-from .atomic import atomic_write_text
+from .atomic import atomic_write_text, is_partial  # is_partial: write-then-rename leftovers of a crashed run
 
 MARKER = ".scoursph-run"
 OWN_FILES = ("particles.h5", "particles.pvd", "final.png", "scene.toml", "run.json")
@@ -34,8 +34,6 @@ OWN_DIRS = {
     "vtk": re.compile(r"\d{6}\.vtp"),
     "checkpoints": re.compile(r"\d{9}\.h5"),  # output/checkpoint.py
 }
-# write-then-rename leftovers of a crashed run (solver/output/atomic.py)
-_PARTIAL = re.compile(r"\..+\.partial(\.[A-Za-z0-9]+)?")
 MODES = ("new", "overwrite", "continue")
 
 
@@ -104,14 +102,12 @@ def owned_files(out_dir) -> list[Path]:
     """The files in a run directory that a run wrote (the marker last)."""
     path = Path(out_dir)
     out = [path / name for name in OWN_FILES if (path / name).is_file()]
-    out += [p for p in path.iterdir() if p.is_file() and _PARTIAL.fullmatch(p.name)]
+    out += [p for p in path.iterdir() if p.is_file() and is_partial(p)]
     for sub, pattern in OWN_DIRS.items():
         folder = path / sub
         if folder.is_dir() and not folder.is_symlink():
             out += sorted(
-                p
-                for p in folder.iterdir()
-                if p.is_file() and (pattern.fullmatch(p.name) or _PARTIAL.fullmatch(p.name))
+                p for p in folder.iterdir() if p.is_file() and (pattern.fullmatch(p.name) or is_partial(p))
             )
     if (path / MARKER).is_file():
         out.append(path / MARKER)
