@@ -657,7 +657,9 @@ def _fill_material_defaults(merged: dict) -> dict:
     return merged
 
 
-_UNION_TAGS = {"water", "soil", "rectangle", "polygon"}
+# the tagged unions' tag keys and their choices (Material, Block above)
+_UNION_CHOICES = {"model": ("water", "soil"), "shape": ("rectangle", "polygon")}
+_UNION_TAGS = {tag for tags in _UNION_CHOICES.values() for tag in tags}
 
 
 def _dotted(loc) -> str:
@@ -701,10 +703,18 @@ def _numerics_defaults(raw: dict, defaults: dict) -> dict:
 
 def _refusal(exc: ValidationError, path, prefix=()) -> SceneError:
     err = exc.errors()[0]
-    ctx_error = err.get("ctx", {}).get("error")
-    if isinstance(ctx_error, _Inconsistent):
-        return SceneError(path, ctx_error.key, str(ctx_error))
-    return SceneError(path, _dotted((*prefix, *err["loc"])), _reason(err))
+    ctx = err.get("ctx", {})
+    if isinstance(ctx.get("error"), _Inconsistent):
+        return SceneError(path, ctx["error"].key, str(ctx["error"]))
+    key = _dotted((*prefix, *err["loc"]))
+    if err["type"] in ("union_tag_not_found", "union_tag_invalid"):  # a block's shape, a material's model
+        tag = ctx.get("discriminator", "").strip("'")
+        choices = ", ".join(f'"{c}"' for c in _UNION_CHOICES.get(tag, ()))
+        written = (
+            "missing value" if err["type"] == "union_tag_not_found" else f"{ctx.get('tag')!r} is not known"
+        )
+        return SceneError(path, f"{key}.{tag}", f"{written}: one of {choices}")
+    return SceneError(path, key, _reason(err))
 
 
 def parse_scene(raw: dict, path="<scene>") -> Scene:

@@ -184,8 +184,8 @@ REFUSED = {
     "model is a list": (
         GOOD,
         lambda t: edit(t, 'model = "water"', "model = [1]"),
-        "materials.water",
-        "model",
+        "materials.water.model",
+        'one of "water", "soil"',
     ),
     "numerics is an array": (GOOD, lambda t: "numerics = []\n" + t, "numerics", "valid dictionary"),
     "NaN in domain.min": (
@@ -336,6 +336,24 @@ REFUSED = {
         ),
         "blocks[0].vertices",
         "three or more",
+    ),
+    "block without a shape": (
+        GOOD,
+        lambda t: edit(t, 'shape = "rectangle"\n', ""),
+        "blocks[0].shape",
+        'missing value: one of "rectangle", "polygon"',
+    ),
+    "block of an unknown shape": (
+        GOOD,
+        lambda t: edit(t, 'shape = "rectangle"', 'shape = "circle"'),
+        "blocks[0].shape",
+        '\'circle\' is not known: one of "rectangle", "polygon"',
+    ),
+    "material of an unknown model": (
+        GOOD,
+        lambda t: edit(t, 'model = "water"', 'model = "mud"'),
+        "materials.water.model",
+        '\'mud\' is not known: one of "water", "soil"',
     ),
 }
 
