@@ -485,6 +485,12 @@ def _check_consistency(s: Scene):
             )
         if block.hydrostatic and block.geostatic:
             raise _Inconsistent(f"{key}", "hydrostatic and geostatic exclude each other")
+        if block.hydrostatic and s.scene.gravity[-1] > 0:
+            # the profile hangs from a free surface at the block's top: upward gravity would put the
+            # column in tension, below the Tait EOS's limit -B for a strong enough g (NaN densities)
+            raise _Inconsistent(
+                f"{key}.hydrostatic", "needs gravity pointing down (scene.gravity's last component <= 0)"
+            )
         if np.any(corners < lo - eps) or np.any(corners > hi + eps):
             raise _Inconsistent(key, "lies (partly) outside the domain")
         extent = corners.max(axis=0) - corners.min(axis=0)

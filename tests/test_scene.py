@@ -337,6 +337,12 @@ REFUSED = {
         "blocks[0].vertices",
         "three or more",
     ),
+    "hydrostatic block under upward gravity": (
+        ROOT.joinpath("scenes", "hydrostatic_tank_2d.toml").read_text(),
+        lambda t: edit(t, "gravity = [0.0, -9.81]", "gravity = [0.0, 4611686018427387904]"),
+        "blocks[0].hydrostatic",
+        "gravity pointing down",
+    ),
     "block without a shape": (
         GOOD,
         lambda t: edit(t, 'shape = "rectangle"\n', ""),
