@@ -191,3 +191,9 @@ class TermContext:
             dim = self.particles.dim
             return np.zeros(0, np.int64), np.zeros((0, dim)), np.zeros((0, dim))
         return self.images.tables()
+
+    def image_sources(self):
+        """The source row of every image row n_local + k (box walls' images, then bodies')."""
+        if self.images is None:
+            return np.zeros(0, np.int64)
+        return self.images.sources()

@@ -352,7 +352,8 @@ def test_still_water_stays_still_beside_a_convex_body_corner():
     at 0.01 s, 0.16 m/s at 0.1 s (the scour pond's 0.4 m/s current, docs/scour_study.md); with every
     pair kept (the wedge then sees the body three times over) 0.12-0.13 m/s at 0.05-0.1 s; with
     pairs kept wherever the target is in front of the image's edge line (no foot condition) 0.04 m/s
-    at 0.1 s and 0.18 m/s at 0.2 s. Fixed: 0.004 m/s (measured 2026-12-02)."""
+    at 0.1 s and 0.18 m/s at 0.2 s. Fixed: 0.004 m/s (measured 2026-12-02); with the bodies' images
+    carrying the hydrostatic image pressure too (corner10), 0.0002 m/s."""
     scene = parse_scene(tomllib.loads(CORNER_POND), "<corner pond>")
     water = scene.materials["water"]
     bound = -scene.scene.gravity[1] * 0.08 / water.sound_speed
@@ -366,6 +367,42 @@ def test_still_water_stays_still_beside_a_convex_body_corner():
         worst = max(worst, float(np.hypot(*v[near].T).max()))
     assert worst < bound
     assert sim.plan.term(BodyGuard).leaks == 0
+
+
+def test_water_over_a_body_is_held_as_over_the_floor():
+    """Body images carry the hydrostatic image pressure (numerics.image_pressure = "hydrostatic"),
+    p' = p_src + rho_src g . (x' - x_src), as the box walls' images do: in CORNER_POND every image
+    row's pressure is the twin's (tests/naive.py) over the box walls' and the bodies' images, and at
+    t = 0 every particle accelerates as the one at the same place in the same pond over a flat floor.
+    Bound, an error analysis: an image's density is its source's, not the hydrostatic density at its
+    own place, a relative difference g dy / c^2 with dy <= 2 reach, on a pressure term of scale
+    p / (rho h) <= g H / h (H = 0.08 m, the pond's depth): 0.055 m/s^2. Measured 0.0037 m/s^2 (at the
+    crown's far end, beside the box wall). Before the bodies' images had the increment the crown's first
+    row fell at 5.5 m/s^2 more than the floor's, and the water at the convex corner was pulled towards
+    the crown at 1.2 m/s^2: the still pond's start current of 0.004-0.007 m/s (docs/scour_study.md)."""
+    import naive
+
+    accelerations = {}
+    for rule in ("region", "flat"):
+        sim = Simulation(parse_scene(body_corner_rules._raw(rule), "<corner pond>"))
+        sim.compute_rates()  # the rates at t = 0
+        ps = sim.particles
+        n = ps.n_owned
+        accelerations[rule] = {
+            tuple(np.round(xi, 6)): ai.copy() for xi, ai in zip(ps["x"][:n], ps["acc"][:n])
+        }
+        if rule == "region":
+            src = sim.ctx.image_sources()
+            assert len(src) == ps.n_image and sim.ctx.images.walls.bodies.n > 0
+            mirror = ps["p"].copy()
+            mirror[ps.n_local : ps.n_total] = ps["p"][src]
+            want = naive.hydrostatic_image_pressure(ps.n_local, src, ps["x"], ps["rho"], sim.gravity, mirror)
+            np.testing.assert_allclose(ps["p"][: ps.n_total], want[: ps.n_total], rtol=1e-12, atol=1e-9)
+            water = sim.scene.materials["water"]
+            g, c = -sim.scene.scene.gravity[1], water.sound_speed
+            bound = g * 0.08 / sim.h * g * 2 * sim.radius / c**2
+    worst = max(np.hypot(*(a - accelerations["flat"][k])) for k, a in accelerations["region"].items())
+    assert worst < bound
 
 
 def test_saturated_scour_scene_keeps_the_soil_under_the_crown_at_rest():

@@ -15,10 +15,12 @@ Images. A local particle at signed distance 0 <= dist < reach outside an edge (o
 whose foot lies on the edge, gets an image mirrored across the edge's line: x' = R x + o with
 R = I - 2 n n^T and o = 2 (a . n) n (a a point of the edge); velocities v' = R v (free slip:
 normal part reversed, tangential kept) and tensors T' = R T R^T, which is eq. (23) for an
-axis-aligned edge. A particle within reach of a convex vertex whose foot lies on neither edge
-(the wedge outside the corner) is mirrored through the vertex, x' = 2 v - x, as if the corner were
-rounded to a point: the wall normal there is m = (x - v)/|x - v|, so R = I - 2 m m^T (radial
-velocity reversed, tangential kept). Without it a jet aimed at a corner (a square turned 45
+axis-aligned edge. Pressures are the source's plus the hydrostatic difference to the image's place
+(hydrostatic_image_pressure.py, numerics.image_pressure = "hydrostatic"), as at the box walls.
+A particle within reach of a convex vertex whose foot lies on neither edge (the wedge outside the
+corner) is mirrored through the vertex, x' = 2 v - x, as if the corner were rounded to a point:
+the wall normal there is m = (x - v)/|x - v|, so R = I - 2 m m^T (radial velocity reversed,
+tangential kept). Without it a jet aimed at a corner (a square turned 45
 degrees) drove particles into the body (tests/test_bodies.py). At a concave vertex between a body
 and a box wall the corner image (the image of an image) is missing.
 

@@ -1,6 +1,13 @@
 """Hydrostatic image pressure (numerics.image_pressure = "hydrostatic"): an image's pressure is
 its source's plus the hydrostatic difference between the two points, so the water layer next
-to a floor is supported (the seed's mirror image, sec. 2.5, carries only the source's own)."""
+to a floor is supported (the seed's mirror image, sec. 2.5, carries only the source's own).
+Body images (bodies.py) get it too: without it the water on a caisson's crown was held only by
+the mirror pressure (its first row fell at 5.5 m/s^2 more than a floor's first row), and round a
+convex corner the point images carried the pressure of their sources' height, not their own,
+pulling the wedge's water towards the crown at 1.2 m/s^2: the still pond's start current beside
+the corner (docs/scour_study.md, "The residual current (corner10)"). The soil's equilibrium image
+stress (equilibrium_soil_images.py) stays on the box walls' images: on an inclined edge its
+increment of the vertical stress is not free slip."""
 
 from __future__ import annotations
 
@@ -27,7 +34,7 @@ def add_hydrostatic_image_pressure(first, src, x, rho, gravity, p, fraction=None
 
 
 class HydrostaticImagePressure(Term):
-    """Adds rho g . (x_image - x_source) to each image's Tait pressure."""
+    """Adds rho g . (x_image - x_source) to each image's Tait pressure (box walls' and bodies')."""
 
     name = "hydrostatic image pressure"
     stage = Stage.STATE
@@ -35,7 +42,8 @@ class HydrostaticImagePressure(Term):
     @classmethod
     def build(cls, scene, materials):
         wanted = scene.numerics.image_pressure == ImagePressure.HYDROSTATIC
-        return cls(scene) if wanted and materials.has_phase(Phase.WATER) and scene.walls.kinds() else None
+        imaged = scene.walls.kinds() or scene.bodies
+        return cls(scene) if wanted and materials.has_phase(Phase.WATER) and imaged else None
 
     def __init__(self, scene):
         super().__init__()
@@ -55,6 +63,6 @@ class HydrostaticImagePressure(Term):
         ps = ctx.particles
         if ps.n_image:
             add_hydrostatic_image_pressure(
-                ps.n_local, ctx.image_tables()[0], ps["x"], ps["rho"], ctx.gravity, ps["p"],
+                ps.n_local, ctx.image_sources(), ps["x"], ps["rho"], ctx.gravity, ps["p"],
                 ps["water_fraction"] if self.fraction else None,
             )  # fmt: skip

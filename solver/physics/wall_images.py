@@ -197,6 +197,12 @@ class ImageWalls:
         """The box walls' images (the body images after them have rotation tables of their own)."""
         return self.src[: self.n], self.sign[: self.n], self.offset[: self.n]
 
+    def sources(self):
+        """The source row of every image, box walls' then bodies' (image rows n_local + k)."""
+        if self.bodies is None or self.bodies.n == 0:
+            return self.src[: self.n]
+        return np.concatenate((self.src[: self.n], self.bodies.src[: self.bodies.n]))
+
     def velocity_signs(self):
         """Per-image velocity signs, v'_a = t_a v_a: the mirror signs when every wall is free
         slip; with no-slip walls, -1 on every axis for an image across one."""
@@ -303,6 +309,9 @@ class WallImages(Term):
 
     def tables(self):
         return self.walls.tables()
+
+    def sources(self):
+        return self.walls.sources()
 
     def prune(self, particles, lists):
         return self.walls.prune(particles, lists)
