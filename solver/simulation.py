@@ -241,7 +241,9 @@ class Simulation:
                 self._worst_acceleration(),
             )
         rebalance = self.comm.rebalance_due(self.step_count, n)  # MPI: new cuts when the load drifted
-        removed = self._rebuild_requested()  # by the LEAVING stage: the halo is gone, lists are stale
+        # particles removed at LEAVING: the halo is gone and the lists are stale (one more collective
+        # per step, only in scenes with outlets)
+        removed = Stage.LEAVING in self.plan.schedule and self._rebuild_requested()
         if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance or removed:
             self.rebuild()
         self._run(Stage.AFTER_DRIFT)

@@ -5,9 +5,11 @@ solver/defaults.toml, `[outlet_defaults]`). Only particles of the outlet's mater
 take part; an inlet's buffer particles never do.
 
 kind = "buffer" (the default): the outflow buffer of open-boundary SPH (Federico et al. 2012,
-Eur. J. Mech. B/Fluids 34:35-46, sec. 3: an outflow region at least one kernel support deep where
+Eur. J. Mech. B/Fluids 34:35-46: an outflow region at least one kernel support deep where
 particles keep the velocity they had on entering it and move with it; Tafuni et al. 2018, CMAME
-342:604-624, sec. 3, the same buffer with the state extrapolated from the fluid instead of frozen).
+342:604-624: the same buffer with the state extrapolated from the fluid instead of frozen. We
+could not read either paper here: the concept is as commonly summarised, the details below are
+ours).
 A particle whose centre enters the zone becomes a buffer particle of it (field `outlet_buffer`, the
 zone's index; -1 for every other particle): from then on it receives no rates (velocity, density,
 soil stress and every other integrated field keep the values they had on entry, so its pressure
@@ -16,18 +18,21 @@ dropped too), and still acts on its neighbours. So the fluid upstream of the zon
 kernel of particles in the state of the oncoming stream, instead of the truncated kernel of a
 deletion zone, which acts as a free surface at its upstream face and draws the flow down over the
 last kernel support (the scour study's end-wall trough, docs/scour_study.md). The frozen state is
-Federico et al.'s zero-order choice; we did not extrapolate (Tafuni) because in a supercritical
-outflow the state on entry is the oncoming state. A buffer particle is deleted, and its mass
+Federico et al.'s zero-order choice; Tafuni et al.'s extrapolation, which lets the buffer follow
+a changing upstream state, is not implemented. A buffer particle is deleted, and its mass
 counted, when its centre leaves the zone through any face (this includes a face on an open side
 of the domain, and one lying on a body's edge: the end wall's top in the scour scenes). That is
 done in Stage.LEAVING, right after the drift and before the state check (which would report a
 particle outside the domain) and the bodies' leak guard (which would count a particle inside the
 end wall). A face on a wall side of the domain is not an exit: the drift reflects a buffer
 particle there like any other. What we take from the papers is the concept (an outflow zone one
-support deep, frozen velocity, removal on leaving it); we have not checked their code.
-DualSPHysics' outflow zones and SPHinXsys' disposers hold a buffer of the same kind; we could not
-confirm from their documentation whether their buffer freezes or extrapolates the density, so
-this is our own reading, not a copy of either.
+support deep, frozen velocity, removal on leaving it). One code does the same, checked in its
+source: PySPH's SimpleOutlet (pysph/sph/simple_inlet_outlet.py: a particle entering the outlet
+region moves to an outlet array and is removed when it leaves the region), whose particles are
+advanced by InletOutletStep (pysph/sph/integrator_step.py: x += u dt only, so u and rho stay as
+they were). For DualSPHysics' outflow zones and SPHinXsys' disposers we
+could not confirm from their documentation whether the buffer freezes or extrapolates the state;
+this is our own implementation, not a copy of any of them.
 
 kind = "delete": every particle whose centre is in the zone after a drift is removed at once (the
 former outlet; a free overfall at the zone's upstream face).
@@ -151,7 +156,7 @@ class Outlets(Term):
                 Equation(
                     "buffer zone: a particle entering keeps its velocity and density (no rates), moves "
                     "ballistically, acts on its neighbours; removed and counted when it leaves the zone",
-                    "Federico et al. (2012) sec. 3; Tafuni et al. (2018) sec. 3",
+                    "Federico et al. (2012); Tafuni et al. (2018); PySPH SimpleOutlet",
                 )
             )
         if not self.buffered.all():
@@ -238,7 +243,7 @@ class OutletBuffers(Term):
         self.equations = (
             Equation(
                 "every integrated rate and the XSPH correction of outlet buffer particles set to zero",
-                "Federico et al. (2012) sec. 3 (frozen velocity in the outflow buffer)",
+                "Federico et al. (2012): frozen velocity in the outflow buffer",
             ),
         )
 
