@@ -567,3 +567,34 @@ def test_soil_and_pore_water_in_a_buffer_keep_their_state():
     free_sand = (ps["material"][:n] == sand) & (ps["outlet_buffer"][:n] < 0)
     moved = [np.abs(ps["x"][i] - x_free0[int(ps["id"][i])]).max() for i in np.flatnonzero(free_sand)]
     assert max(moved) > 0.0
+
+
+def test_a_checkpoint_from_before_outlet_kinds_restarts_as_a_deletion_outlet(tmp_path):
+    """A checkpoint written before outlets had a kind (its scene has no outlets[].kind and no
+    [outlet_defaults]) was made with the deletion outlet: it restarts with kind = "delete" and is
+    refused, naming the key, with the buffer (which would add a particle field it does not hold)."""
+    import h5py
+    from test_restart import _names
+
+    from scoursph.cli import main
+    from solver.run import run_scene
+    from solver.scene import load_scene
+
+    path = tmp_path / "stream.toml"
+    text = STREAM.replace("end_time = 0.3", "end_time = 0.05")
+    path.write_text(
+        text.replace("max = [0.29, 0.08]\n\n[output]", 'max = [0.29, 0.08]\nkind = "delete"\n\n[output]')
+    )
+    run = tmp_path / "run"
+    run_scene(load_scene(path), run, quiet=True)
+    with h5py.File(run / "checkpoints" / _names(run)[-1], "r+") as f:  # as the former solver wrote it
+        scene = json.loads(f["meta/scene"][()])
+        del scene["outlet_defaults"]
+        del scene["outlets"][0]["kind"]
+        del f["meta/scene"]
+        f["meta/scene"] = json.dumps(scene)
+    later = ["--set", "scene.end_time=0.06", "--quiet"]
+    old = tmp_path / "old.toml"
+    old.write_text(text)  # the scene file as it was: no kind (now the buffer by default)
+    assert main(["run", str(old), "--restart", str(run)] + later) == 2
+    assert main(["run", str(path), "--restart", str(run)] + later) == 0
