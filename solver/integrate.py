@@ -106,5 +106,6 @@ def max_norm2(n, vec):
 
 
 def as_rows(array, n):
-    """A (n, k) view of the first n rows of a 1D or 2D field (no copy)."""
-    return array[:n].reshape(n, -1)
+    """A (n, k) view of the first n rows of a 1D or 2D field (no copy); k explicit, so a rank that
+    owns no particle (n = 0) gets a (0, k) view too."""
+    return array[:n].reshape(n, int(np.prod(array.shape[1:])))

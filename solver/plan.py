@@ -141,7 +141,7 @@ def _schedule(terms, fields):
     same stretch reads before anyone writes it again (one exchange instead of several)."""
     changing = {n for n, s in fields.items() if s.mirror is not Mirror.NONE and not s.constant}
     out = {}
-    stretches = [RATE_STAGES, (Stage.AFTER_KICK,), (Stage.AFTER_DRIFT,)]
+    stretches = [RATE_STAGES, (Stage.AFTER_KICK,), (Stage.LEAVING,), (Stage.AFTER_DRIFT,)]
     for stages in stretches:
         run = [t for t in terms if t.stage in stages]
         stale = set(changing)

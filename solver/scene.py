@@ -38,8 +38,9 @@ from .scene_open import (
     Inlet,
     InletDefaults,
     Outlet,
+    OutletDefaults,
     check_open_boundaries,
-    fill_inlet_defaults,
+    fill_open_defaults,
 )
 
 DEFAULTS_PATH = Path(__file__).with_name("defaults.toml")
@@ -375,6 +376,7 @@ class Scene(Strict):
     outlets: list[Outlet] = []
     bodies: list[Body] = []
     inlet_defaults: InletDefaults  # values in defaults.toml
+    outlet_defaults: OutletDefaults  # values in defaults.toml
 
     @property
     def dim(self):
@@ -727,7 +729,7 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
     defaults = tomllib.loads(DEFAULTS_PATH.read_text())
     merged = deep_merge(_numerics_defaults(raw, defaults), raw)
     _default_fields_for_the_phases(raw, merged)
-    for table in ("material_defaults", "artificial_viscosity_defaults", "inlet_defaults"):
+    for table in ("material_defaults", "artificial_viscosity_defaults", "inlet_defaults", "outlet_defaults"):
         # checked before they are filled in, so an error names the key the user wrote
         model = MaterialDefaults if table == "material_defaults" else Scene.model_fields[table].annotation
         try:
@@ -736,7 +738,7 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
         except ValidationError as exc:
             raise _refusal(exc, path, (table,)) from None
     try:
-        return Scene.model_validate(fill_inlet_defaults(_fill_material_defaults(merged)))
+        return Scene.model_validate(fill_open_defaults(_fill_material_defaults(merged)))
     except ValidationError as exc:
         raise _refusal(exc, path) from None
 

@@ -1,13 +1,15 @@
 """Scene input for open boundaries and rigid bodies: `[[inlets]]`, `[[outlets]]`, `[[bodies]]`.
 
 Kept out of solver/scene.py (which imports these models) so that the open-boundary input is one
-concept in one file. Every default is in solver/defaults.toml (`[inlet_defaults]`), filled into each
-inlet before validation; the physics is in solver/physics/inlet.py, outlet.py and bodies.py.
+concept in one file. Every default is in solver/defaults.toml (`[inlet_defaults]`,
+`[outlet_defaults]`), filled into each inlet and outlet before validation; the physics is in
+solver/physics/inlet.py, outlet.py and bodies.py.
 """
 
 from __future__ import annotations
 
 import copy
+from enum import StrEnum
 from typing import Annotated
 
 import numpy as np
@@ -50,13 +52,28 @@ class InletDefaults(_Strict):
     prefill_time: NonNegative
 
 
+class OutletKind(StrEnum):
+    """What an outlet zone does with a particle that enters it (solver/physics/outlet.py)."""
+
+    BUFFER = "buffer"  # frozen velocity and density until it leaves the zone, then removed
+    DELETE = "delete"  # removed at once (a free overfall at the zone's face)
+
+
 class Outlet(_Strict):
-    """A deletion zone (a box): particles whose centre enters it are removed and counted."""
+    """An outflow zone (a box): particles whose centre enters it are frozen and removed when they
+    leave it (kind "buffer"), or removed at once (kind "delete"); the removed mass is counted."""
 
     name: str
     min: list[float]
     max: list[float]
+    kind: Annotated[OutletKind, Field(strict=False)]  # default in defaults.toml ([outlet_defaults])
     materials: list[str] | None = None  # default: every material
+
+
+class OutletDefaults(_Strict):
+    """`[outlet_defaults]` (solver/defaults.toml): what every outlet takes unless it sets it."""
+
+    kind: Annotated[OutletKind, Field(strict=False)]
 
 
 class Body(_Strict):
@@ -67,17 +84,19 @@ class Body(_Strict):
     vertices: list[list[float]]
 
 
-def fill_inlet_defaults(merged: dict) -> dict:
-    """Each `[[inlets]]` entry gets the merged `[inlet_defaults]` values it does not set (a scene's
-    own `[inlet_defaults]` are honoured). Anything of the wrong shape is left for the schema to refuse."""
-    inlets, defaults = merged.get("inlets"), merged.get("inlet_defaults")
-    if not isinstance(inlets, list) or not isinstance(defaults, dict):
-        return merged
+def fill_open_defaults(merged: dict) -> dict:
+    """Each `[[inlets]]` entry gets the merged `[inlet_defaults]` values it does not set, each
+    `[[outlets]]` entry the `[outlet_defaults]` ones (a scene's own defaults tables are honoured).
+    Anything of the wrong shape is left for the schema to refuse."""
     merged = copy.deepcopy(merged)
-    for item in merged["inlets"]:
-        if isinstance(item, dict):
-            for key, value in defaults.items():
-                item.setdefault(key, value)
+    for entries, table in (("inlets", "inlet_defaults"), ("outlets", "outlet_defaults")):
+        items, defaults = merged.get(entries), merged.get(table)
+        if not isinstance(items, list) or not isinstance(defaults, dict):
+            continue
+        for item in items:
+            if isinstance(item, dict):
+                for key, value in defaults.items():
+                    item.setdefault(key, value)
     return merged
 
 
@@ -124,6 +143,17 @@ def check_open_boundaries(s) -> list[tuple[str, str]]:
         for m in outlet.materials or ():
             if m not in names:
                 return [(f"{key}.materials", f"unknown material '{m}'")]
+        thinnest = float(np.min(np.asarray(outlet.max, float) - np.asarray(outlet.min, float)))
+        support = 2.0 * s.h  # the cubic spline's support radius (seed eq. 5)
+        if outlet.kind == OutletKind.BUFFER and thinnest < support * (1 - 1e-9):
+            return [
+                (
+                    f"{key}.max",
+                    f"a buffer zone must be at least one kernel support 2h = {support:.4g} m thick in every "
+                    f"direction (it is {thinnest:.4g} m): the fluid upstream must see a full kernel of "
+                    'buffer particles (Federico et al. 2012); enlarge it or use kind = "delete"',
+                )
+            ]
     for k, body in enumerate(s.bodies):
         key = f"bodies[{k}]"
         if dim != 2:

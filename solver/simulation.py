@@ -49,6 +49,8 @@ class Simulation:
             is3d=True if scene.dim == 3 else None,
             gravity=np.asarray(scene.scene.gravity, float),
             images=self.plan.term(WallImages),
+            integrated=self.plan.integrated,
+            position_correction=self.plan.position_correction,
         )
         self.ctx.owns = self.comm.owns
         self._phase_of_material = self.plan.materials.phase
@@ -226,6 +228,10 @@ class Simulation:
         self.t += dt
         self.step_count += 1
         self.dt_prev = self.ctx.dt_prev = dt
+        # outlets remove what left through them before anything judges the new positions (a particle
+        # leaving the domain through an open side inside an outlet zone, or crossing into a body there)
+        self._run(Stage.LEAVING)
+        n = ps.n_owned
         status = self.comm.max(state_status(n, ps["x"], ps["v_half"], ps[self._rho_state], self.lo, self.hi))
         if status != STATE_OK:
             self._report_bad_state(status)
@@ -235,17 +241,25 @@ class Simulation:
                 self._worst_acceleration(),
             )
         rebalance = self.comm.rebalance_due(self.step_count, n)  # MPI: new cuts when the load drifted
-        if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance:
+        # particles removed at LEAVING: the halo is gone and the lists are stale (one more collective
+        # per step, only in scenes with outlets)
+        removed = Stage.LEAVING in self.plan.schedule and self._rebuild_requested()
+        if self.comm.max(moved2) > (0.5 * self.skin) ** 2 or rebalance or removed:
             self.rebuild()
         self._run(Stage.AFTER_DRIFT)
         self._rebuild_if_requested()
         return dt
 
+    def _rebuild_requested(self):
+        """Did a term on any rank add or remove particles since the last call? (Collective; clears
+        the request.)"""
+        requested, self.ctx.rebuild_requested = self.ctx.rebuild_requested, False
+        return self._count_changes and self.comm.any(requested)
+
     def _rebuild_if_requested(self):
         """Terms that add or remove particles (inlets, outlets) ask for a rebuild: new rows get
         their owner, ghosts, images and neighbours before the next step (collective)."""
-        requested, self.ctx.rebuild_requested = self.ctx.rebuild_requested, False
-        if self._count_changes and self.comm.any(requested):
+        if self._rebuild_requested():
             self.rebuild()
 
     def advance_to(self, t_target, on_step=None):

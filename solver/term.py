@@ -44,6 +44,7 @@ class Stage(Enum):
     RATES = "the rates at step n, from neighbour sums"
     AFTER_RATES = "after the rates"
     AFTER_KICK = "after the leap-frog kick, on the half-step values"
+    LEAVING = "after the drift, before the state check: particles leaving through outlets removed"
     AFTER_DRIFT = "after the drift, on x at n+1 and v at n+1/2"
 
 
@@ -160,6 +161,8 @@ class TermContext:
     rows: dict = field(default_factory=dict)  # Phase -> owned rows of that phase (int64)
     images: object = None  # the wall-image term, if the scene has walls
     shared: dict = field(default_factory=dict)  # per-step values one term leaves for another
+    integrated: tuple = ()  # the plan's (value, half, rate) triples: terms that freeze rows drop the rates
+    position_correction: str | None = None  # the plan's drift-velocity correction field (XSPH), if any
     owns: object = None  # owns(x) -> bool mask: does this process own new particles at x? (MPI ownership)
     rebuild_requested: bool = False  # set by request_rebuild(); the step loop rebuilds and clears it
 

@@ -111,3 +111,10 @@ def body_repulsion(x, r0, d_coef, edges, convex_vertices):
                 d = np.linalg.norm(r)
                 acc[i] += d_coef * ((r0 / d) ** 12 - (r0 / d) ** 4) / d * r / d
     return acc
+
+
+def left_boxes(x, lo, hi, zone):
+    """Twin of outlet.left_boxes: the box a buffer particle (zone >= 0) has left, else -1."""
+    k = np.maximum(zone, 0)
+    outside = np.any((x < lo[k]) | (x > hi[k]), axis=1)
+    return np.where((zone >= 0) & outside, zone, -1)

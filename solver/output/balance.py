@@ -9,8 +9,10 @@ Per material:
     from inlet buffers) - (stored(t) - stored(0)) = 0
 
 stored counts every particle of the material in the domain except inlet buffer particles (they
-belong to the inlet until released). The run reports the residual and whether it is within one
-particle volume dx^dim. Pore water is water: its volume is its mass / rho0 = n V (the pores).
+belong to the inlet until released); outlet buffer particles are stored until the outlet removes
+them (outlet.py), so the outflow is counted once, when they leave the buffer zone. The run reports
+the residual and whether it is within one particle volume dx^dim. Pore water is water: its volume
+is its mass / rho0 = n V (the pores).
 """
 
 from __future__ import annotations

@@ -313,13 +313,25 @@ def scene_differences(old, new, prefix="") -> list[tuple[str, object, object]]:
     return [] if old == new else [(prefix[:-1], old, new)]
 
 
+def upgrade_scene(old: dict, new: dict) -> dict:
+    """The checkpoint's merged scene as this version would write it. Checkpoints written before
+    outlets had a kind (2026-12-02) deleted on entry: their outlets are kind "delete", and their
+    missing [outlet_defaults] is taken as the new scene's (a default table, whose effect is each
+    outlet's kind, compared itself)."""
+    old = dict(old)
+    if "outlet_defaults" not in old and "outlet_defaults" in new:
+        old["outlet_defaults"] = new["outlet_defaults"]
+        old["outlets"] = [dict(o, kind=o.get("kind", "delete")) for o in old.get("outlets", [])]
+    return old
+
+
 def check_scene(path, header, scene_json) -> None:
     """CheckpointError naming the first key where the scene differs from the checkpoint's in
     a way a restart may not change, or an end time before the checkpoint's time."""
     new = json.loads(scene_json)
     diffs = [
         d
-        for d in scene_differences(header["scene"], new)
+        for d in scene_differences(upgrade_scene(header["scene"], new), new)
         if not any(d[0] == c or d[0].startswith(c + ".") for c in CHANGEABLE)
     ]
     if diffs:

@@ -81,6 +81,8 @@ def main(argv=None):
             "stress_dev_half",
             "eps_vp",
             "art_stress",
+            "inlet_buffer",
+            "outlet_buffer",
         )
         if n in sim.particles
     ]

@@ -17,7 +17,7 @@ from .gravity import Gravity
 from .hydrostatic_image_pressure import HydrostaticImagePressure
 from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
-from .outlet import Outlets
+from .outlet import OutletBuffers, Outlets
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .seepage_pore_diffusion import PoreDensityDiffusion, PoreDensityGradient
 from .soil_rates import SoilRates
@@ -52,10 +52,11 @@ TERMS = (
     SeepageOnWater,  # before the soil side, which reads the p^ it writes
     SeepageOnSoil,
     FixedParticles,
+    OutletBuffers,  # after every rate: buffer particles receive none
     SoilReturnMapping,
     MidpointStart,
     MidpointContinuity,
     BodyGuard,  # after the drift: leaks counted and reflected before particles are added or removed
     Inlets,
-    Outlets,
+    Outlets,  # Stage.LEAVING: before the state check and the bodies' guard
 )

@@ -32,6 +32,7 @@ from ..materials import Phase
 from ..scene import Leapfrog
 from ..term import Equation, Stage, Term
 from .density_diffusion import diffusion_equation, diffusion_settings
+from .outlet import frozen_rows
 
 
 @kernel(parallel=True)
@@ -151,4 +152,5 @@ class MidpointContinuity(Term):
             True if self.diffuse else None, ps["rho_ref"] if self.hydrostatic else None, ctx.is3d,
         )  # fmt: skip
         n = ps.n_owned
+        ps["drho"][frozen_rows(ps, n)] = 0.0  # outlet buffer particles keep their density (outlet.py)
         lf_kick(n, ctx.dt, as_rows(ps["rho"], n), as_rows(ps["drho"], n))
