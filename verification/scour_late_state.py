@@ -1,6 +1,6 @@
-"""The late state of a saturated scour run (docs/scour_study.md, "What the runs show"): the mound against
-the end wall, the trough upstream of it, the pore water's drift and the soil's and pore water's speeds,
-from a study run's outputs in runs/scour_study/<case>/ (scour.csv, scour_profiles.csv, particles.h5).
+"""The late state of a saturated scour run (docs/scour_study_history.md, "What the runs show"): the mound
+against the end wall, the trough upstream of it, the pore water's drift and the soil's and pore water's
+speeds, from a study run's outputs in runs/scour_study/<case>/ (scour.csv, scour_profiles.csv, particles.h5).
 
     python -m verification.scour_late_state saturated_q0.11_dx5mm [--times 1 2] [--figure PNG]
 
