@@ -165,6 +165,11 @@ class Soil(Strict):
     # porosity n (then `density` is the dry density (1 - n) rho_grain) and hydraulic conductivity k
     porosity: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None
     permeability: Positive | None = None  # m/s
+    # erosion at the bed surface (solver/physics/shields_pickup.py, docs/erosion.md): the median grain
+    # size d50 (m), a material property independent of the particle spacing; the bed erodes only when
+    # it is given. critical_shields: None = Soulsby & Whitehouse (1997) from d50; a value overrides it
+    grain_size: Positive | None = None
+    critical_shields: Positive | None = None
 
     @property
     def shear_modulus(self):
@@ -281,6 +286,7 @@ SCHEMES = {
         "image_pressure": "mirror",
         "density_diffusion": "none",
         "wall_repulsion": False,
+        "erosion": "none",
     },
 }
 """What each numerics.scheme sets. Precedence: defaults.toml < the preset < the scene's own keys."""
@@ -329,6 +335,9 @@ class Numerics(Strict):
     artificial_stress: NonNegative = 0.0  # soil tensile-instability remedy, epsilon of Gray et al. (2001)
     artificial_stress_exponent: Positive = 2.55  # n of f_ij^n (Gray et al. 2001; Bui et al. 2008)
     settling_time: NonNegative = 0.0  # s of kinetic-damping settling before release (t = 0); 0 = off
+    # erosion of soils with a grain_size: "shields" (Shields pick-up of the bed surface, van Rijn 1984;
+    # docs/erosion.md) or "none" (the seed's continuum soil only)
+    erosion: Literal["shields", "none"] = "shields"
 
 
 class Output(Strict):
@@ -563,6 +572,15 @@ def _check_seepage(s: Scene):
                             "required when the scene has water (seepage force, seed eq. 18); the seed gives "
                             "no value: choose one with a source (docs/seepage.md)",
                         )
+    for name, mat in s.materials.items():
+        if isinstance(mat, Soil) and mat.critical_shields is not None and mat.grain_size is None:
+            raise _Inconsistent(
+                f"materials.{name}.critical_shields", "needs grain_size (a Shields number is per grain size)"
+            )
+        if isinstance(mat, Soil) and mat.grain_size is not None and mat.porosity is None:
+            raise _Inconsistent(
+                f"materials.{name}.porosity", "required with grain_size (grain density = density / (1 - n))"
+            )
     for k, block in enumerate(s.blocks):
         key = f"blocks[{k}]"
         if not block.saturated:

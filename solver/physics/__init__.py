@@ -6,6 +6,7 @@ within a stage; a term that needs another's output comes after it.
 """
 
 from .artificial_stress import ArtificialStress, ArtificialStressForce
+from .bed_surface import BedSurface
 from .bodies import BodyGuard
 from .body_repulsion import BodyRepulsion
 from .density_diffusion import DensityDiffusionRate, HydrostaticReference
@@ -20,6 +21,7 @@ from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import OutletBuffers, Outlets
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .seepage_pore_diffusion import PoreDensityDiffusion, PoreDensityGradient
+from .shields_pickup import ShieldsPickup
 from .soil_rates import SoilRates
 from .soil_stress import SoilReturnMapping, SoilStressState
 from .tait_eos import TaitEquationOfState
@@ -39,6 +41,8 @@ TERMS = (
     PoreDensityGradient,  # after the reference it reads
     PorePressureAtSoil,
     SoilStressState,
+    BedSurface,  # erosion: after the stress it leaves alone, before the pick-up that reads it
+    ShieldsPickup,  # zeroes the stress of what it suspends, before anything reads the stress
     ArtificialStress,
     EquilibriumSoilImages,
     FrictionalWalls,

@@ -23,6 +23,7 @@ from ..particles import FieldSpec, Mirror
 from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .shields_pickup import erosion_materials
 
 MOHR_COULOMB = int(YieldModel.MOHR_COULOMB)  # plain ints: compile-time constants in the kernels
 DRUCKER_PRAGER = int(YieldModel.DRUCKER_PRAGER)
@@ -113,6 +114,7 @@ def soil_stress_state(
     mean_stress,
     eps_vp=None,
     update_history=False,
+    suspended=None,
 ):
     """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
     return mapping; writes p to mean_stress and the admissible s in place. With
@@ -127,7 +129,9 @@ def soil_stress_state(
     sigma/rho^2 grow without bound, and at rho_i + rho_j < 0 the artificial viscosity
     (eq. 19, 2 / (rho_i + rho_j)) pulls a particle into its image instead of resisting: the
     issue-14 column collapses ended so. p evolves exactly as before (continuity's rate does not
-    depend on rho_i); only the density used as a volume and in eqs. (19), (20) changes."""
+    depend on rho_i); only the density used as a volume and in eqs. (19), (20) changes.
+    suspended (erosion, solver/physics/shields_pickup.py; None without): soil the flow has picked up
+    has no shear strength, s = 0, and keeps p."""
     for t in prange(rows.shape[0]):
         i = rows[t]
         m = material[i]
@@ -152,6 +156,8 @@ def soil_stress_state(
             alpha_psi[m],
         )
         mean_stress[i] = p
+        if suspended is not None and suspended[i] != 0:
+            a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         s[i, 0] = a0
         s[i, 1] = a1
         s[i, 2] = a2
@@ -186,8 +192,9 @@ def yield_excess(rows, mean_stress, s, material, soil):
 class Constitution:
     """The per-material constants of eqs. (16)-(17), applied to the owned soil rows."""
 
-    def __init__(self, materials):
+    def __init__(self, materials, erodes=False):
         s = materials.soil
+        self.erodes = erodes  # suspended soil has no shear strength (shields_pickup.py)
         self.rho0 = materials.rho0
         self.constants = (
             s.bulk,
@@ -215,6 +222,7 @@ class Constitution:
             ps["mean_stress"],
             ps["eps_vp"] if self.plastic else None,
             update_history,
+            ps["suspended"] if self.erodes else None,
         )
 
 
@@ -230,7 +238,7 @@ class SoilStressState(Term):
 
     def __init__(self, scene, materials):
         super().__init__()
-        self.constitution = Constitution(materials)
+        self.constitution = Constitution(materials, bool(erosion_materials(scene, materials)))
         self.fields = dict(STRESS_FIELDS)
         if self.constitution.plastic:
             self.fields["eps_vp"] = EPS_VP
@@ -261,11 +269,13 @@ class SoilReturnMapping(Term):
 
     @classmethod
     def build(cls, scene, materials):
-        return cls(materials) if materials.has_phase(Phase.SOIL) else None
+        if not materials.has_phase(Phase.SOIL):
+            return None
+        return cls(materials, bool(erosion_materials(scene, materials)))
 
-    def __init__(self, materials):
+    def __init__(self, materials, erodes=False):
         super().__init__()
-        self.constitution = Constitution(materials)
+        self.constitution = Constitution(materials, erodes)
         # tension cracking resets the half-step density (soil_stress_state)
         self.writes = ("stress_dev_half", "mean_stress") + (
             ("eps_vp", "rho_half") if self.constitution.plastic else ()
