@@ -54,7 +54,7 @@ from .bed_surface import surface_limits
 SUSPENDED = FieldSpec(0, np.uint8, "1: soil picked up by the flow (no shear strength)", Mirror.SCALAR)
 ERODED_SHARE = FieldSpec(0, np.float64, "share of a bed-surface particle's mass eroded so far (0-1)")
 SHIELDS = FieldSpec(0, np.float64, "Shields number of the flow over a bed-surface particle (0 elsewhere)")
-MIN_HEIGHT = 1.0  # pairs with y >= MIN_HEIGHT dx sample the flow: the second water row and up (docs/erosion.md)
+MIN_HEIGHT = 1.0  # pairs with y >= MIN_HEIGHT dx sample the flow: the second water row up (docs/erosion.md)
 
 
 def erosion_materials(scene, materials):
