@@ -57,7 +57,10 @@ MAX_STEPS = 1_000_000_000  # a-priori steps: 4.6 days for 1000 particles at 2.5 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
 WallKind = Literal["free_slip", "no_slip", "frictional", "wall_function"]
-OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank")
+OUTPUT_FIELDS = ("velocity", "density", "pressure", "mass", "material", "acceleration", "rank") + (
+    "suspended", "shields", "eroded_share"  # the erosion law's state (solver/physics/shields_pickup.py)
+)  # fmt: skip
+EROSION_FIELDS = ("suspended", "shields", "eroded_share")
 # what a picture (output.render_field) can colour by -> the output field it needs (None: always written)
 RENDER_FIELDS = {
     "speed": "velocity",
@@ -523,6 +526,13 @@ def _check_consistency(s: Scene):
             "output.fields",
             "'pressure' is the water pressure (Tait EOS), and this scene has no water material",
         )
+    asked = [f for f in s.output.fields if f in EROSION_FIELDS]
+    if asked and not _erodes(s):
+        raise _Inconsistent(
+            "output.fields",
+            f"'{asked[0]}' belongs to the erosion law, and nothing erodes in this scene (it needs water, "
+            "a soil with a grain_size and numerics.erosion = 'shields')",
+        )
     field = s.output.render_field
     if field not in RENDER_FIELDS:
         raise _Inconsistent(
@@ -559,6 +569,16 @@ def _check_consistency(s: Scene):
         )
 
 
+def _erodes(s: Scene) -> bool:
+    """Whether the erosion law runs (shields_pickup.erosion_materials, from the scene alone)."""
+    mats = s.materials.values()
+    return (
+        s.numerics.erosion == "shields"
+        and any(isinstance(m, Water) for m in mats)
+        and any(isinstance(m, Soil) and m.grain_size is not None for m in mats)
+    )
+
+
 def _check_seepage(s: Scene):
     """Water that can reach soil needs the soil's n and k; saturated blocks need pore water."""
     waters = [name for name, m in s.materials.items() if isinstance(m, Water)]
@@ -572,14 +592,18 @@ def _check_seepage(s: Scene):
                             "required when the scene has water (seepage force, seed eq. 18); the seed gives "
                             "no value: choose one with a source (docs/seepage.md)",
                         )
+    if _erodes(s):
+        for name, mat in s.materials.items():
+            if isinstance(mat, Water) and mat.viscosity <= 0.0:
+                raise _Inconsistent(
+                    f"materials.{name}.viscosity",
+                    "must be > 0 where a soil erodes (the grain size's D* and the log law's smooth wall "
+                    "need it)",
+                )
     for name, mat in s.materials.items():
         if isinstance(mat, Soil) and mat.critical_shields is not None and mat.grain_size is None:
             raise _Inconsistent(
                 f"materials.{name}.critical_shields", "needs grain_size (a Shields number is per grain size)"
-            )
-        if isinstance(mat, Soil) and mat.grain_size is not None and mat.porosity is None:
-            raise _Inconsistent(
-                f"materials.{name}.porosity", "required with grain_size (grain density = density / (1 - n))"
             )
     for k, block in enumerate(s.blocks):
         key = f"blocks[{k}]"

@@ -9,6 +9,9 @@ OUTPUT_TO_ARRAY = {
     "material": "material",
     "acceleration": "acc",
     "id": "id",
+    "suspended": "suspended",
+    "shields": "shields",
+    "eroded_share": "eroded_share",
 }
 ALWAYS = ("position", "id", "material", "rank")  # rank: which process owned it (MPI)
 

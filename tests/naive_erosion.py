@@ -1,0 +1,111 @@
+"""Slow NumPy twins of the erosion kernels (solver/sediment.py, solver/physics/bed_surface.py,
+solver/physics/shields_pickup.py), written from the equations of their module docs: all-pairs loops,
+the log law inverted by bisection instead of the fixed point.
+
+  phi_b    = sum_c V_c W_bc over bed (non-suspended) soil c, b included when bed
+  n_b      = -grad phi_b / |grad phi_b|
+  u*       solves u_t = (u* / kappa) max(ln(y / z0(u*)), 1),
+           z0 = k_s/30 (1 - exp(-u* k_s / 27 nu)) + nu / 9u*
+  theta_b  = rho_w <u*^2> / ((rho_s - rho_w) g d50),  <.> weighted by V_a W_ab over water a with y >= y_min
+  share_b += E dt V_b^((d-1)/d) / m_b,
+           E = 0.00033 rho_s sqrt((s-1) g d) D*^0.3 ((theta - theta_cr)/theta_cr)^1.5
+"""
+
+import numpy as np
+from naive import cubic_spline, cubic_spline_dwdr
+
+KAPPA = 0.40
+
+
+def roughness_length(u_star, k_s, nu):
+    return k_s / 30.0 * (1.0 - np.exp(-u_star * k_s / (27.0 * nu))) + nu / (9.0 * u_star)
+
+
+def friction_velocity(u, y, k_s, nu):
+    """u* of the log law by bisection on [0, kappa u] (the law's clamp ln >= 1 bounds u* by kappa u)."""
+    if u <= 0.0 or y <= 0.0:
+        return 0.0
+    speed = lambda us: us / KAPPA * max(np.log(y / roughness_length(us, k_s, nu)), 1.0)  # noqa: E731
+    lo, hi = 1e-12, KAPPA * u
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if speed(mid) < u else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def van_rijn(theta, theta_cr, d, rho_s, rho_w, nu, g):
+    if theta <= theta_cr:
+        return 0.0
+    s = rho_s / rho_w
+    dstar = d * ((s - 1.0) * g / nu**2) ** (1.0 / 3.0)
+    return 0.00033 * rho_s * np.sqrt((s - 1.0) * g * d) * dstar**0.3 * ((theta - theta_cr) / theta_cr) ** 1.5
+
+
+def bed_surface(soil, x, mass, rho, suspended, h, dim):
+    fraction, normal = np.zeros(len(x)), np.zeros((len(x), dim))
+    bed = [c for c in soil if not suspended[c]]
+    for b in soil:
+        phi, grad = 0.0, np.zeros(dim)
+        for c in bed:
+            d = x[b] - x[c]
+            r = np.linalg.norm(d)
+            vol = mass[c] / rho[c]
+            phi += vol * cubic_spline(r, h, dim)
+            if r > 0:
+                grad += vol * cubic_spline_dwdr(r, h, dim) / r * d
+        fraction[b] = phi
+        size = np.linalg.norm(grad)
+        normal[b] = -grad / size if size > 0 else 0.0
+    return fraction, normal
+
+
+def shields_pickup(soil, water, x, v, mass, rho, material, fixed, suspended, share, stress_dev, fraction,
+                   normal, mat, rho_w, nu, g, dx, h, dim, dt, surface_limit, deposit_limit,
+                   min_height):  # fmt: skip
+    """(shields, share, suspended, stress_dev) after one pass; mat[m] = dict(d50, theta_cr, rho_s) or None."""
+    shields, share, suspended, stress_dev = (
+        np.zeros(len(x)),
+        share.copy(),
+        suspended.copy(),
+        stress_dev.copy(),
+    )
+    w0 = float(cubic_spline(0.0, h, dim))
+    for b in soil:
+        props = mat[material[b]]
+        if props is None:
+            continue
+        vol_b = mass[b] / rho[b]
+        lifted = bool(suspended[b])
+        near_bed = fraction[b] + w0 * vol_b >= deposit_limit if lifted else fraction[b] < surface_limit
+        if not near_bed or not normal[b].any():
+            continue
+        weights, us2 = [], []
+        for a in water:
+            if fixed is not None and fixed[a]:
+                continue
+            d = x[a] - x[b]
+            y = d @ normal[b] - 0.5 * dx
+            w = mass[a] / rho[a] * cubic_spline(np.linalg.norm(d), h, dim)
+            if y < min_height * dx or w <= 0:
+                continue
+            rel = v[a] - v[b]
+            tangential = rel - (rel @ normal[b]) * normal[b]
+            weights.append(w)
+            us2.append(friction_velocity(np.linalg.norm(tangential), y, 2.5 * props["d50"], nu) ** 2)
+        if not weights:
+            continue
+        theta = rho_w * np.average(us2, weights=weights) / ((props["rho_s"] - rho_w) * g * props["d50"])
+        shields[b] = theta
+        if lifted:
+            if theta <= props["theta_cr"]:
+                suspended[b], share[b] = 0, 0.0
+            continue
+        share[b] += (
+            van_rijn(theta, props["theta_cr"], props["d50"], props["rho_s"], rho_w, nu, g)
+            * dt
+            * (vol_b ** ((dim - 1) / dim) / mass[b])
+        )
+        if share[b] >= 1.0:
+            suspended[b], share[b] = 1, 0.0
+            stress_dev[b] = 0.0
+    return shields, share, suspended, stress_dev

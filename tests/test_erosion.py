@@ -1,0 +1,268 @@
+"""The erosion law (issue 24 item 2; docs/erosion.md): the grain-scale formulas against their NumPy
+twins and sources, the bed-surface and pick-up kernels against tests/naive_erosion.py, the lattice
+thresholds, the plan (nothing of it without a grain size, water, or with the seed's scheme), scene
+refusals, and a bed under an imposed log-law flow."""
+
+import subprocess
+import tomllib
+
+import naive_erosion
+import numpy as np
+import pytest
+from conftest import ENV, SCOURSPH, disordered_lattice, rectangle_block, water_and_sand_scene, write_scene
+from naive import cubic_spline
+
+from solver.kernels import cubic_spline_normalisation
+from solver.neighbors import CellGrid, CellList
+from solver.physics.bed_surface import bed_surface, lattice_fractions, surface_limits
+from solver.physics.shields_pickup import MIN_HEIGHT, shields_pickup
+from solver.plan import build_plan, explain
+from solver.scene import parse_scene
+from solver.sediment import (
+    bed_friction_velocity,
+    critical_shields,
+    dimensionless_grain_size,
+    pickup_rate,
+    speed_at_height,
+)
+from verification.analytic.scour_formulas import shields_critical
+
+NU, G, RHO_W, RHO_S = 1.0e-6, 9.81, 1000.0, 2650.0
+NAMES = {"bed surface", "shields pick-up"}
+
+
+# ---- grain-scale formulas ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("d", [0.06e-3, 0.2e-3, 0.5e-3, 2e-3, 20e-3])
+def test_critical_shields_is_soulsby_whitehouse(d):
+    """The kernel's theta_cr is the study's NumPy Soulsby (1997) eqs. 75-76 to round-off, and in the
+    range of the Shields curve: 0.03-0.06 for sand and gravel (Soulsby 1997, Fig. 8)."""
+    dstar = dimensionless_grain_size(d, RHO_S / RHO_W, NU, G)
+    assert critical_shields(dstar) == pytest.approx(float(shields_critical(d)), rel=1e-12)
+    if d >= 0.2e-3:
+        assert 0.025 < critical_shields(dstar) < 0.06
+
+
+def test_pickup_rate_is_van_rijn_and_zero_below_threshold():
+    d, tcr = 0.5e-3, 0.0308
+    dstar = dimensionless_grain_size(d, 2.65, NU, G)
+    assert dstar == pytest.approx(12.64, abs=0.01)  # 0.5 mm quartz in water: D* = 12.6 (Soulsby 1997 Table 7)
+    for theta in (0.5 * tcr, tcr, 1.5 * tcr, 4 * tcr):
+        expected = naive_erosion.van_rijn(theta, tcr, d, RHO_S, RHO_W, NU, G)
+        assert pickup_rate(theta, tcr, d, 2.65, dstar, RHO_S, G) == pytest.approx(expected, rel=1e-12)
+    assert pickup_rate(tcr, tcr, d, 2.65, dstar, RHO_S, G) == 0.0
+    # T = 1 by hand: 0.00033 x 2650 x sqrt(1.65 x 9.81 x 5e-4) x 12.64^0.3 = 0.1684 kg/m^2/s
+    assert pickup_rate(2 * tcr, tcr, d, 2.65, dstar, RHO_S, G) == pytest.approx(0.1684, rel=1e-3)
+
+
+@pytest.mark.parametrize("u_star", [0.002, 0.01, 0.03, 0.1, 0.3])
+@pytest.mark.parametrize("y", [0.5e-3, 2.5e-3, 7.5e-3, 0.05])
+def test_log_law_inverse(u_star, y):
+    """bed_friction_velocity inverts speed_at_height (fixed point to 1e-10) and agrees with the twin's
+    bisection, from the smooth (u* k_s / nu = 2.5) to the rough wall (375)."""
+    k_s = 2.5 * 0.5e-3
+    u = speed_at_height(u_star, y, k_s, NU)
+    back = bed_friction_velocity(u, y, k_s, NU)
+    assert back == pytest.approx(naive_erosion.friction_velocity(u, y, k_s, NU), rel=1e-8)
+    if np.log(y / naive_erosion.roughness_length(u_star, k_s, NU)) > 1.0:  # outside the law's clamp
+        assert back == pytest.approx(u_star, rel=1e-8)
+    assert bed_friction_velocity(0.0, y, k_s, NU) == 0.0
+
+
+# ---- lattice thresholds --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_lattice_fractions_and_limits(dim):
+    """The bed fractions of a lattice half-space by the twin's kernel over the points; the limits lie
+    strictly between the rows they separate, and the second row is complete (Shepard sum ~1)."""
+    second, top, above = lattice_fractions(dim, 1.3)
+    n = 8
+    axes = [np.arange(-n, n + 1.0)] * (dim - 1)
+    pts = np.stack(np.meshgrid(*axes, np.arange(-2 * n, 1.0), indexing="ij"), -1).reshape(-1, dim)
+    for row, value in zip((-1, 0, 1), (second, top, above)):
+        at = np.zeros(dim)
+        at[-1] = row
+        assert value == pytest.approx(
+            cubic_spline(np.linalg.norm(pts - at, axis=1), 1.3, dim).sum(), rel=1e-12
+        )
+    assert second == pytest.approx(1.0, abs=0.02)
+    surface, deposit = surface_limits(dim, 1.3)
+    assert above < deposit < top < surface < second
+
+
+# ---- kernels against their twins ----------------------------------------------------------------
+
+
+def bed_and_flow(rng, dim=2, n_side=8, dx=0.01):
+    """A jittered bed (soil: material 1 erodes, 2 does not) under jittered water (material 0) with a
+    sheared flow, some bed suspended, some water flagged as wall."""
+    h = 1.3 * dx
+    bed = disordered_lattice(n_side, dim, dx, rng)
+    flow = disordered_lattice(n_side, dim, dx, rng)
+    flow[:, -1] += n_side * dx
+    x = np.vstack([flow, bed])
+    nw, ns = len(flow), len(bed)
+    water, soil = np.arange(nw), np.arange(nw, nw + ns)
+    material = np.zeros(nw + ns, dtype=np.int32)
+    material[soil] = 1 + (rng.random(ns) < 0.2)
+    v = rng.normal(0, 0.05, (nw + ns, dim))
+    v[water, 0] += 0.2 + 3.0 * (x[water, -1] - n_side * dx)  # a shear flow over the bed
+    rho = np.where(material == 0, 1000.0, 1590.0) * (1 + rng.normal(0, 0.01, nw + ns))
+    mass = np.where(material == 0, 1000.0, 1590.0) * dx**dim
+    suspended = np.zeros(nw + ns, dtype=np.uint8)
+    suspended[soil] = (rng.random(ns) < 0.1) & (x[soil, -1] > (n_side - 3) * dx)
+    fixed = np.zeros(nw + ns, dtype=np.uint8)
+    fixed[water] = rng.random(nw) < 0.1
+    phase = np.where(material == 0, 0, 1).astype(np.int32)
+    radius = 2 * h * 1.1
+    lo, hi = np.full(dim, -dx), np.full(dim, 2 * n_side * dx + dx)
+    cells = CellList(CellGrid.covering(lo, hi, radius, pad=radius))
+    cells.bin(x, len(x))
+    return dict(
+        x=x, v=v, rho=rho, mass=mass, material=material, water=water, soil=soil, suspended=suspended,
+        fixed=fixed, h=h, dx=dx, dim=dim, norm=cubic_spline_normalisation(dim, h),
+        soil_soil=cells.neighbour_list(x, soil.astype(np.int64), radius, phase, 1),
+        soil_water=cells.neighbour_list(x, soil.astype(np.int64), radius, phase, 0),
+    )  # fmt: skip
+
+
+def _bed_surface(s):
+    n = len(s["x"])
+    fraction, normal = np.full(n, np.nan), np.full((n, s["dim"]), np.nan)
+    nl = s["soil_soil"]
+    bed_surface(
+        nl.targets, nl.start, nl.index, s["x"], s["mass"], s["rho"], s["suspended"], s["h"], s["norm"],
+        fraction, normal,
+    )  # fmt: skip
+    return fraction, normal
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_bed_surface_matches_twin(rng, dim):
+    s = bed_and_flow(rng, dim, n_side=8 if dim == 2 else 5)
+    fraction, normal = _bed_surface(s)
+    f_twin, n_twin = naive_erosion.bed_surface(
+        s["soil"], s["x"], s["mass"], s["rho"], s["suspended"], s["h"], dim
+    )
+    soil = s["soil"]
+    assert np.allclose(fraction[soil], f_twin[soil], rtol=1e-12, atol=0)
+    assert np.allclose(normal[soil], n_twin[soil], rtol=1e-10, atol=1e-12)
+    side = (8 if dim == 2 else 5) * s["dx"]
+    xs = s["x"][soil]
+    inner = ((xs[:, :-1] > s["dx"]) & (xs[:, :-1] < side - s["dx"])).all(axis=1)  # away from the bed's sides
+    top = soil[inner & (xs[:, -1] > side - s["dx"]) & (s["suspended"][soil] == 0)]
+    assert len(top) and (normal[top, -1] > 0.5).all()  # the bed's top row points up, out of the bed
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_shields_pickup_matches_twin(rng, dim):
+    """theta, the eroded share, suspension (with the stress zeroed) and deposition against the twin; the
+    shares start random near 1 and dt is large (DT: the share grows ~0.002 per second at theta = 1.3
+    theta_cr, dx = 1 cm), so particles do cross into suspension."""
+    DT = 20.0
+    s = bed_and_flow(rng, dim, n_side=8 if dim == 2 else 5)
+    fraction, normal = _bed_surface(s)
+    n = len(s["x"])
+    share = rng.uniform(0.95, 1.0, n)
+    stress = rng.normal(0, 100.0, (n, 3 if dim == 2 else 6))
+    d50 = np.array([0.0, 0.5e-3, 0.0])
+    dstar = np.array([0.0, dimensionless_grain_size(0.5e-3, 2.65, NU, G), 0.0])
+    theta_cr = np.array([0.0, 0.0308, 0.0])
+    limits = surface_limits(dim, 1.3)
+    out = dict(
+        suspended=s["suspended"].copy(), share=share.copy(), stress=stress.copy(), shields=np.full(n, np.nan)
+    )
+    nl = s["soil_water"]
+    shields_pickup(
+        nl.targets, nl.start, nl.index, s["x"], s["v"], s["mass"], s["rho"], s["material"], s["fixed"],
+        out["suspended"], out["share"], out["shields"], fraction, normal, out["stress"], d50, theta_cr, dstar,
+        np.array([0.0, 2.65, 0.0]), np.array([0.0, RHO_S, 0.0]), RHO_W, NU, G, s["dx"], s["h"], s["norm"],
+        DT, *limits,
+    )  # fmt: skip
+    mat = [None, dict(d50=0.5e-3, theta_cr=0.0308, rho_s=RHO_S), None]
+    shields, share_t, susp_t, stress_t = naive_erosion.shields_pickup(
+        s["soil"], s["water"], s["x"], s["v"], s["mass"], s["rho"], s["material"], s["fixed"], s["suspended"],
+        share, stress, fraction, normal, mat, RHO_W, NU, G, s["dx"], s["h"], dim, DT, *limits, MIN_HEIGHT,
+    )  # fmt: skip
+    soil = s["soil"]
+    assert np.allclose(out["shields"][soil], shields[soil], rtol=1e-7, atol=0)
+    assert np.allclose(out["share"][soil], share_t[soil], rtol=1e-6, atol=1e-12)
+    assert np.array_equal(out["suspended"][soil], susp_t[soil])
+    assert np.array_equal(out["stress"][soil], stress_t[soil])
+    assert (shields[soil] > 0.0308).any() and (shields[soil][shields[soil] > 0] < 0.0308).any()  # both sides
+    newly = soil[(out["suspended"][soil] == 1) & (s["suspended"][soil] == 0)]
+    assert len(newly) > 0 and not out["stress"][newly].any()
+    assert (out["shields"][soil[s["material"][soil] == 2]] == 0).all()  # no grain size, no erosion
+
+
+# ---- the plan and the scene ---------------------------------------------------------------------
+
+BOX = water_and_sand_scene("eroding_box", 0.01, 0.01, "[0.2, 0.2]") + rectangle_block(
+    "bed", "sand", "[0.0, 0.0]", "[0.2, 0.05]", "saturated = true\ngeostatic = true\nwater_table = 0.1"
+) + rectangle_block("flow", "water", "[0.0, 0.05]", "[0.2, 0.1]", "hydrostatic = true")  # fmt: skip
+GRAIN = "porosity = 0.4\n"
+
+
+def box(grain="grain_size = 5.0e-4\n", numerics=""):
+    text = BOX.replace(GRAIN, GRAIN + grain) + numerics
+    return parse_scene(tomllib.loads(text), "box.toml")
+
+
+def test_the_erosion_terms_only_with_a_grain_size_water_and_the_default_scheme():
+    eroding = build_plan(box())
+    assert NAMES <= {t.name for t in eroding.terms}
+    assert {"suspended", "eroded_share", "shields", "bed_fraction", "bed_normal"} <= set(eroding.fields)
+    for scene in (box(grain=""), box(numerics='\n[numerics]\nscheme = "seed"\n'),
+                  box(numerics='\n[numerics]\nerosion = "none"\n')):  # fmt: skip
+        plan = build_plan(scene)
+        assert not NAMES & {t.name for t in plan.terms} and NAMES <= set(plan.absent)
+        assert not {"suspended", "eroded_share", "shields", "bed_fraction", "bed_normal"} & set(plan.fields)
+    text = explain(eroding, box())
+    for expected in ("shields pick-up: soil <- water", "bed surface: soil <- soil",
+                     "Soulsby & Whitehouse (1997)", "van Rijn (1984)", "theta_cr 0.0308",
+                     "suspended"):  # fmt: skip
+        assert expected in text, expected
+
+
+WATER_LINE = "typical_velocity = 2.0\n"  # the water material's last line in BOX
+
+
+@pytest.mark.parametrize(
+    "edits,key,reason",
+    [
+        ({GRAIN: GRAIN + "critical_shields = 0.05\n"}, "materials.sand.critical_shields", "needs grain_size"),
+        ({GRAIN: GRAIN + "grain_size = -1.0e-3\n"}, "materials.sand.grain_size", "greater than 0"),
+        ({"": '\n[output]\nfields = ["velocity", "shields"]\n'}, "output.fields", "nothing erodes"),
+        ({GRAIN: GRAIN + "grain_size = 5.0e-4\n", "": '\n[numerics]\nerosion = "grains"\n'},
+         "numerics.erosion", "'shields' or 'none'"),
+        ({GRAIN: GRAIN + "grain_size = 5.0e-4\n", WATER_LINE: WATER_LINE + "viscosity = 0.0\n"},
+         "materials.water.viscosity", "must be > 0"),
+    ],
+)  # fmt: skip
+def test_scene_refusals_name_the_key(tmp_path, edits, key, reason):
+    """edits: replacements in BOX; the key "" appends its text."""
+    text = BOX
+    for old, new in edits.items():
+        text = text + new if old == "" else text.replace(old, new)
+    path = write_scene(tmp_path, text)
+    r = subprocess.run(
+        SCOURSPH + ["run", str(path), "--out", str(tmp_path / "o")], capture_output=True, text=True, env=ENV
+    )
+    assert r.returncode == 2, r.stderr
+    assert key in r.stderr and reason in r.stderr and str(path) in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_dry_soil_with_a_grain_size_erodes_nothing():
+    """Erosion needs water (which needs the soil's porosity, for the grain density): a dry column whose
+    sand has a grain size plans as before."""
+    from verification.column_collapse import scene_at
+
+    dry = scene_at(0.01, end_time=0.01)
+    raw = dry.model_dump()
+    name = next(k for k, m in raw["materials"].items() if m["model"] == "soil")
+    sand = dry.materials[name].model_copy(update={"grain_size": 5e-4})
+    plan = build_plan(dry.model_copy(update={"materials": {**dry.materials, name: sand}}))
+    assert not NAMES & {t.name for t in plan.terms} and "suspended" not in plan.fields
