@@ -266,3 +266,50 @@ def test_a_dry_soil_with_a_grain_size_erodes_nothing():
     sand = dry.materials[name].model_copy(update={"grain_size": 5e-4})
     plan = build_plan(dry.model_copy(update={"materials": {**dry.materials, name: sand}}))
     assert not NAMES & {t.name for t in plan.terms} and "suspended" not in plan.fields
+
+
+# ---- a bed under an imposed log-law flow (verification/sediment_threshold.py) --------------------
+
+
+def test_threshold_case_passes_at_5mm(tmp_path):
+    """The verification case in CI size: onset bracket [0.95, 1.05] theta_cr, the estimator exact."""
+    from verification import sediment_threshold
+
+    res = sediment_threshold.run(sediment_threshold.DEFAULT_RESOLUTION, out_dir=tmp_path)
+    assert res.passed, "\n".join(c.line() for c in res.checks)
+    assert res.figure.exists()
+
+
+def test_suspended_soil_loses_its_shear_strength_and_the_rest_keeps_it():
+    """Surface particles about to be worn through (share 1 - 1e-9) under 3 theta_cr are suspended
+    within a step; their deviatoric stress is zero from then on, the bed below keeps its own. The row
+    below becomes the bed surface and starts to erode; the rows under it do not."""
+    from verification import sediment_threshold as st
+    from verification.seepage_common import soil_rows
+
+    sim = st.bed_under_log_law(st.DEFAULT_RESOLUTION, 3.0)
+    ps = sim.particles
+    dx = sim.scene.scene.spacing
+    soil = st.middle(sim, soil_rows(sim))
+    depth = st.BED - ps["x"][soil, 1]  # of the particle centres below the bed surface
+    top, second, deeper = soil[depth < dx], soil[(depth > dx) & (depth < 2 * dx)], soil[depth > 2 * dx]
+    sim.step()
+    assert (ps["shields"][top] > 3.0 * st.critical_shields() * 0.99).all()
+    ps["eroded_share"][top] = 1.0 - 1e-9
+    for _ in range(5):
+        sim.step()
+    assert ps["suspended"][top].all()
+    assert not ps["stress_dev"][top].any()
+    assert (ps["eroded_share"][second] > 0).all() and not ps["suspended"][second].any()
+    assert not ps["suspended"][deeper].any() and not ps["eroded_share"][deeper].any()
+    assert np.abs(ps["stress_dev"][deeper]).max() > 0.0  # geostatic K0 state: s != 0 below the surface
+
+
+@pytest.mark.nightly
+def test_threshold_resolution_study(tmp_path):
+    from verification import sediment_threshold
+    from verification.common import study_failures
+
+    rows = sediment_threshold.study(out_dir=tmp_path)
+    assert not study_failures(rows)
+    assert all(0.9 <= r["onset_low"] <= 1.0 <= r["onset_high"] <= 1.1 for r in rows)
