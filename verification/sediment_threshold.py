@@ -192,7 +192,8 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     save_study(rows, out_dir, "resolution_study",
                note="Reproduce: `python -m verification.sediment_threshold --study`; "
                f"{len(NIGHTLY_RATIOS)} runs of {1e3 * HOLD:g} ms per resolution, times summed; "
-               f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, {machine_load()}")  # fmt: skip
+               f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
+               f"{machine_load()}")  # fmt: skip
     return rows
 
 
