@@ -47,7 +47,7 @@ def test_critical_shields_is_soulsby_whitehouse(d):
 def test_pickup_rate_is_van_rijn_and_zero_below_threshold():
     d, tcr = 0.5e-3, 0.0308
     dstar = dimensionless_grain_size(d, 2.65, NU, G)
-    assert dstar == pytest.approx(12.64, abs=0.01)  # 0.5 mm quartz in water: D* = 12.6 (Soulsby 1997 Table 7)
+    assert dstar == pytest.approx(12.648, abs=0.001)  # by hand: 5e-4 (1.65 x 9.81 / 1e-12)^(1/3) = 12.648
     for theta in (0.5 * tcr, tcr, 1.5 * tcr, 4 * tcr):
         expected = naive_erosion.van_rijn(theta, tcr, d, RHO_S, RHO_W, NU, G)
         assert pickup_rate(theta, tcr, d, 2.65, dstar, RHO_S, G) == pytest.approx(expected, rel=1e-12)

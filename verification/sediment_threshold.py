@@ -35,7 +35,7 @@ from .common import RESULTS, CaseResult, Check, machine_load, save_figure, save_
 
 D50 = 0.5e-3
 POROSITY, G_S, K = 0.4, 2.65, 1e-3
-LENGTH, BED, DEPTH = 0.2, 0.03, 0.035
+LENGTH, BED, DEPTH = 0.21, 0.035, 0.035  # whole multiples of every study spacing: the bed's top at BED
 HOLD = 0.01
 SAMPLES = 6  # times over the hold at which theta is read
 NU = 1.0e-6  # the water's kinematic viscosity (defaults.toml: 1e-3 Pa s / 1000 kg/m^3)
