@@ -594,6 +594,22 @@ SATURATED = (
 )
 
 
+def saturated_roundoff_bounds(s, s_stats, steps=300):
+    """(tol_x, tol_v, tol_rho, rho_max) of test_mpi_saturated_bed_equals_serial's docstring."""
+    dx, h = 0.01, 0.013
+    v_max = float(np.max(np.linalg.norm(s["v"], axis=1)))
+    lam = 1.0 / (s_stats["t"] / steps)
+    rho_pore, rho_max = 0.4 * 1000.0, float(np.max(s["rho"]))
+    p_drag = rho_pore * lam * v_max * h / 1.4
+    sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()  # the soil's largest stress
+    p_max = max(1000.0 * 9.81 * 0.2, sigma) + p_drag
+    storage = 1.0 + 0.95 / 0.05
+    bound = dict(spacing=dx, c=29.0, p_max=p_max, alpha=1.0)
+    tol_x, tol_v, _ = roundoff_tolerances(s, s_stats, rho0=rho_pore, **bound)
+    _, _, tol_rho = roundoff_tolerances(s, s_stats, rho0=rho_max, **bound)
+    return storage * tol_x, storage * tol_v, storage * tol_rho, rho_max  # c: the soil's P wave
+
+
 @pytest.mark.parametrize(
     "formulation,ranks,pore_diffusion",
     [
@@ -634,18 +650,7 @@ def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks, pore_diff
 
     s, s_stats = run(1)
     assert np.abs(s["v"]).max() > 0.05  # water slumping, bed settling
-    dx, h = 0.01, 0.013
-    v_max = float(np.max(np.linalg.norm(s["v"], axis=1)))
-    lam = 1.0 / (s_stats["t"] / 300)
-    rho_pore, rho_max = 0.4 * 1000.0, float(np.max(s["rho"]))
-    p_drag = rho_pore * lam * v_max * h / 1.4
-    sigma = np.abs(s["stress_dev"]).max() + np.abs(s["mean_stress"]).max()  # the soil's largest stress
-    p_max = max(1000.0 * 9.81 * 0.2, sigma) + p_drag
-    storage = 1.0 + 0.95 / 0.05
-    bound = dict(spacing=dx, c=29.0, p_max=p_max, alpha=1.0)
-    tol_x, tol_v, _ = roundoff_tolerances(s, s_stats, rho0=rho_pore, **bound)
-    _, _, tol_rho = roundoff_tolerances(s, s_stats, rho0=rho_max, **bound)
-    tol_x, tol_v, tol_rho = storage * tol_x, storage * tol_v, storage * tol_rho  # c: the soil's P wave
+    tol_x, tol_v, tol_rho, rho_max = saturated_roundoff_bounds(s, s_stats)
     for n in ranks:
         m, m_stats = run(n)
         np.testing.assert_array_equal(m["id"], s["id"])
@@ -660,3 +665,37 @@ def test_mpi_saturated_bed_equals_serial(tmp_path, formulation, ranks, pore_diff
             ("stress_dev", np.abs(m["stress_dev"] - s["stress_dev"]).max(), rho_max * 29.0 * tol_v),
         ):
             assert err <= tol, f"{name}: |MPI - serial| = {err:.3g} > {tol:.3g} (ranks = {n})"
+
+
+def test_mpi_eroding_bed_equals_serial(tmp_path):
+    """The erosion law across rank cuts (docs/erosion.md): the slumping water of the saturated-bed case
+    over a sand with a grain size and a critical Shields number of 1e-5 (so the flow suspends surface
+    particles within a few ms: T ~ 1e3, a share of 1 in ~3 ms). The bed fraction reads the neighbours'
+    suspended flags (exchanged to ghosts, mirrored to images) and the pick-up the water ghosts' velocity.
+    300 steps on 2 ranks: the same particles suspended, and the worn shares, positions and velocities
+    within the saturated case's round-off bound (test_mpi_saturated_bed_equals_serial)."""
+    scene = tmp_path / "eroding.toml"
+    scene.write_text(
+        SATURATED.replace(
+            "porosity = 0.4\n", "porosity = 0.4\ngrain_size = 5.0e-4\ncritical_shields = 1.0e-5\n"
+        )
+    )
+    sets = ["parallel.rebalance_every=25", "parallel.imbalance_threshold=1.0"]
+
+    def run(n):
+        (tmp_path / str(n)).mkdir(exist_ok=True)
+        return _driver(tmp_path / str(n), n, scene=scene, steps=300, overrides=sets, timeout=300)
+
+    s, s_stats = run(1)
+    m, _ = run(2)
+    assert s["suspended"].sum() > 0 and (s["eroded_share"] > 0).sum() > 0  # the law acted
+    np.testing.assert_array_equal(m["id"], s["id"])
+    np.testing.assert_array_equal(m["suspended"], s["suspended"])
+    tol_x, tol_v, _, _ = saturated_roundoff_bounds(s, s_stats)
+    assert np.abs(m["x"] - s["x"]).max() <= tol_x and np.abs(m["v"] - s["v"]).max() <= tol_v
+    # a share is E dt / (rho_dry dx) summed, E ~ u*^3 (van Rijn's T^1.5, theta ~ u*^2): its relative
+    # round-off is at most 3 |dv| / v at the sampled water, bounded by 3 tol_v / v_min over the samples
+    grew = s["eroded_share"] > 0
+    rel = np.abs(m["eroded_share"] - s["eroded_share"])[grew] / s["eroded_share"][grew]
+    v_low = max(float(np.percentile(np.linalg.norm(s["v"], axis=1), 5)), 1e-3)
+    assert rel.max() <= 3 * tol_v / v_low, (rel.max(), 3 * tol_v / v_low)

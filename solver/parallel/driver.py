@@ -83,6 +83,8 @@ def main(argv=None):
             "art_stress",
             "inlet_buffer",
             "outlet_buffer",
+            "suspended",
+            "eroded_share",
         )
         if n in sim.particles
     ]
