@@ -32,11 +32,12 @@ SEEPAGE_TERMS = ("pore pressure at soil", "seepage on water", "seepage on soil")
 _results = {}
 
 
-def bed(saturated):
+def bed(saturated, **sand):
+    """The bench's sand bed (saturated: with pore water and a pond); `sand`: extra material keys."""
     dx = (WIDTH * DEPTH / N_SOIL) ** 0.5
     blocks = [{"name": "bed", "material": "sand", "shape": "rectangle", "min": [0.0, 0.0],
                "max": [WIDTH, DEPTH], "geostatic": True, "saturated": saturated}]  # fmt: skip
-    mats = {"sand": sc.sand(0.4, permeability=1e-3)}
+    mats = {"sand": sc.sand(0.4, permeability=1e-3, **sand)}
     if saturated:
         mats["water"] = sc.WATER
         blocks.append({"name": "pond", "material": "water", "shape": "rectangle", "min": [0.0, DEPTH],
