@@ -787,15 +787,24 @@ def parse_scene(raw: dict, path="<scene>") -> Scene:
 
 def _default_fields_for_the_phases(raw: dict, merged: dict):
     """The default output fields include the water pressure; a scene without water that did not
-    choose its fields gets the defaults without it (choosing 'pressure' there is refused)."""
+    choose its fields gets the defaults without it (choosing 'pressure' there is refused). An eroding
+    scene (water, a soil with a grain_size, numerics.erosion = "shields") that did not choose gets
+    'suspended' too: the scour measure reads the bed without the soil the flow has picked up."""
     chose = isinstance(raw.get("output"), dict) and "fields" in raw["output"]
     materials = merged.get("materials")
     if chose or not isinstance(materials, dict) or not isinstance(merged.get("output"), dict):
         return
-    if not any(isinstance(m, dict) and m.get("model") == "water" for m in materials.values()):
-        fields = merged["output"].get("fields")
-        if isinstance(fields, list):
-            merged["output"]["fields"] = [f for f in fields if f != "pressure"]
+    fields = merged["output"].get("fields")
+    if not isinstance(fields, list):
+        return
+    mats = [m for m in materials.values() if isinstance(m, dict)]
+    water = any(m.get("model") == "water" for m in mats)
+    if not water:
+        merged["output"]["fields"] = [f for f in fields if f != "pressure"]
+    numerics = merged.get("numerics") if isinstance(merged.get("numerics"), dict) else {}
+    grains = any(m.get("model") == "soil" and m.get("grain_size") is not None for m in mats)
+    if water and grains and numerics.get("erosion") == "shields" and "suspended" not in fields:
+        merged["output"]["fields"] = fields + ["suspended"]
 
 
 def pydantic_validate(model, value):

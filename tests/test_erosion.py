@@ -313,3 +313,26 @@ def test_threshold_resolution_study(tmp_path):
     rows = sediment_threshold.study(out_dir=tmp_path)
     assert not study_failures(rows)
     assert all(0.9 <= r["onset_low"] <= 1.0 <= r["onset_high"] <= 1.1 for r in rows)
+
+
+def test_an_eroding_scene_writes_the_suspended_flags_and_the_scour_reads_the_bed():
+    """By default an eroding scene outputs 'suspended' (a scene without erosion does not), and the
+    scour surface leaves suspended soil out: a bed with its top row suspended reads a dx lower."""
+    from solver.output.scour import ScourGrid, scour_series
+
+    assert "suspended" in box().output.fields and "suspended" not in box(grain="").output.fields
+    assert "suspended" not in box(numerics='\n[numerics]\nerosion = "none"\n').output.fields
+    dx = 0.01
+    xs, zs = np.meshgrid((np.arange(20) + 0.5) * dx, (np.arange(6) + 0.5) * dx)
+    x = np.c_[xs.ravel(), zs.ravel()]
+    material = np.ones(len(x), dtype=np.int32)
+    top = x[:, 1] > 5 * dx
+    grid = ScourGrid.for_layer(0.0, 0.2, 0.0, 0.2, dx, 1.3 * dx)
+    flags = np.where(top & (x[:, 0] > 0.05) & (x[:, 0] < 0.15), 1, 0).astype(np.uint8)
+    snaps = [(0.0, {"x": x, "material": material, "suspended": np.zeros(len(x), np.uint8)}),
+             (1.0, {"x": x, "material": material, "suspended": flags}),
+             (2.0, {"x": x, "material": material})]  # fmt: skip
+    (m0, _), (m1, _), (m2, _) = scour_series(snaps, [1], grid)
+    assert m0.depth == 0.0 and m2.depth == 0.0  # without the flags every soil particle is bed
+    assert m1.depth == pytest.approx(dx, rel=0.05)  # a lattice row: the rule reads a flat bed's surface
+    assert 0.05 < m1.x_deepest < 0.15

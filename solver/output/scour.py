@@ -118,10 +118,14 @@ def measure(z0: np.ndarray, z: np.ndarray, grid: ScourGrid, t: float) -> ScourMe
 
 
 def scour_series(snapshots, soil_ids, grid: ScourGrid):
-    """[(ScourMeasure, z_s)] for snapshots [(t, {"x": ..., "material": ...})]; soil_ids: soil material ids."""
+    """[(ScourMeasure, z_s)] for snapshots [(t, {"x": ..., "material": ..., "suspended": ...})]; soil_ids:
+    soil material ids. With "suspended" (an eroding scene that writes it, docs/erosion.md) the surface
+    is the bed's: soil the flow has picked up is not bed, wherever it still is."""
     out, z0 = [], None
     for t, fields in snapshots:
         soil = np.isin(fields["material"], soil_ids)
+        if fields.get("suspended") is not None:
+            soil &= fields["suspended"] == 0
         z = surface_profile(fields["x"][soil][:, :2], grid)
         if z0 is None:
             z0 = z
@@ -157,7 +161,7 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
     soil_ids = [k for k, m in enumerate(scene.materials.values()) if m.model == "soil"]
     series = scour_series(
         [
-            (t, {"x": f["position"], "material": f["material"]})
+            (t, {"x": f["position"], "material": f["material"], "suspended": f.get("suspended")})
             for t, f in read_series(out_dir / "particles.h5")
         ],
         soil_ids,
