@@ -24,6 +24,7 @@ class Mirror(Enum):
     VELOCITY = "v' = s v (free slip: normal part reversed; no slip: all reversed)"
     SCALAR = "copied"
     TENSOR = "T'_ab = s_a s_b T_ab (eq. 23; kept across no-slip walls)"
+    DIRECTION = "d' = s d (a geometric vector, as a position without the offset, at every wall kind)"
 
 
 @dataclass(frozen=True)

@@ -341,6 +341,9 @@ class Numerics(Strict):
     # erosion of soils with a grain_size: "shields" (Shields pick-up of the bed surface, van Rijn 1984;
     # docs/erosion.md) or "none" (the seed's continuum soil only)
     erosion: Literal["shields", "none"] = "shields"
+    # between the free water and an eroding bed: "log_law" (the wall shear of the log law in place of the
+    # seepage drag, solver/physics/bed_shear.py) or "drag" (the seepage drag, as on pore water)
+    bed_shear: Literal["log_law", "drag"] = "log_law"
 
 
 class Output(Strict):

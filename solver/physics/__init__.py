@@ -6,6 +6,7 @@ within a stage; a term that needs another's output comes after it.
 """
 
 from .artificial_stress import ArtificialStress, ArtificialStressForce
+from .bed_shear import BedShearOnSoil, BedShearOnWater, FreeWater
 from .bed_surface import BedSurface
 from .bodies import BodyGuard
 from .body_repulsion import BodyRepulsion
@@ -42,6 +43,7 @@ TERMS = (
     PorePressureAtSoil,
     SoilStressState,
     BedSurface,  # erosion: after the stress it leaves alone, before the pick-up that reads it
+    FreeWater,  # water outside the bed, for the pick-up's wall shear and the drag
     ShieldsPickup,  # zeroes the stress of what it suspends, before anything reads the stress
     ArtificialStress,
     EquilibriumSoilImages,
@@ -55,6 +57,8 @@ TERMS = (
     ArtificialStressForce,
     SeepageOnWater,  # before the soil side, which reads the p^ it writes
     SeepageOnSoil,
+    BedShearOnWater,  # erosion: the wall shear in place of the drag on the free water over the bed
+    BedShearOnSoil,
     FixedParticles,
     OutletBuffers,  # after every rate: buffer particles receive none
     SoilReturnMapping,

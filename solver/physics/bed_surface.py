@@ -23,14 +23,16 @@ from numba import prange
 from ..config import kernel
 from ..kernels import cubic_spline_dwdr, cubic_spline_w, kernel_values
 from ..materials import Phase
-from ..particles import FieldSpec
+from ..particles import FieldSpec, Mirror
 from ..term import Equation, Stage, Term
 
 BED_FRACTION = FieldSpec(0, np.float64, "kernel sum of the bed (non-suspended soil) at soil particles")
 
 
 def bed_normal_spec(dim):
-    return FieldSpec(dim, np.float64, "unit normal out of the bed at soil particles (0 inside)")
+    return FieldSpec(
+        dim, np.float64, "unit normal out of the bed at soil particles (0 inside)", Mirror.DIRECTION
+    )
 
 
 def lattice_fractions(dim, h_over_dx, rows=(-1, 0, 1)):

@@ -397,7 +397,7 @@ class BodyImages:
             rule = specs[name].mirror
             if rule is Mirror.POSITION:
                 refresh_rotated_vectors(first, src, rot, off, particles[name], True)
-            elif rule is Mirror.VELOCITY:
+            elif rule is Mirror.VELOCITY or rule is Mirror.DIRECTION:  # body images are free slip
                 refresh_rotated_vectors(first, src, rot, off, particles[name], False)
             elif rule is Mirror.SCALAR:
                 refresh_rotated_scalar(first, src, particles[name])

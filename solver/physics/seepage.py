@@ -59,6 +59,7 @@ from ..scene import Seepage, Soil
 from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .bed_shear import bed_shear_on
 from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
@@ -88,6 +89,9 @@ class SeepageSettings:
     walls: bool = False  # the scene has fixed water blocks (wall particles): they are left out
     linear: bool = False  # p^ by a linear fit (numerics.pore_pressure_at_water = "linear")
     kappa: float = 0.0  # the SPH gradient's normalisation on a lattice (mixture: the buoyancy pair's target)
+    # 1 per eroding soil material whose free water feels the wall shear instead of the drag
+    # (bed_shear.py); None: the drag on every pair
+    erodes: np.ndarray | None = None
 
     @classmethod
     def of(cls, scene, materials):
@@ -115,12 +119,23 @@ class SeepageSettings:
         kappa = 0.0
         if form == Seepage.MIXTURE and GRADIENT_CORRECTION:
             kappa = lattice_gradient_normalisation(scene.dim, scene.numerics.h_over_dx)
-        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear, kappa)
+        erodes = None
+        if bed_shear_on(scene, materials):
+            from .shields_pickup import erosion_materials
+
+            erodes = np.zeros(n_mat, np.uint8)
+            erodes[erosion_materials(scene, materials)] = 1
+        return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear, kappa, erodes)
 
     @property
     def corrected(self):
         """The buoyancy pair carries the kernel-gradient correction (mixture form)."""
         return self.kappa > 0.0
+
+    @property
+    def free_water(self):
+        """Free water over an eroding bed feels the wall shear, not the drag (bed_shear.py)."""
+        return self.erodes is not None
 
     @property
     def mixture(self):
@@ -313,7 +328,8 @@ def pair_correction(m0, m1, m2, m3, m4, m5, den, kappa, is3d):
 @kernel(parallel=True)
 def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag, solid, grain_density, h,
                      norm, acc, drho=None, p=None, pore=None, is3d=None, wall=None, one_soil=None,
-                     linear=None, corr=None, kappa=0.0, chunks=None):  # fmt: skip
+                     linear=None, corr=None, kappa=0.0, chunks=None, free_water=None, suspended=None,
+                     erodes=None):  # fmt: skip
     """Water rows a, one loop over their soil neighbours b (u = v_a - v_b, d = x_b - x_a,
     F = W'(r) / r):
       * with p and pore (mixture): p^_a = sum_b V_b p~_b W_ab / sum_b V_b W_ab (Shepard, the soil's
@@ -347,7 +363,10 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
     Returns the largest lambda_a = sum_b K_ab / m_a. wall: the fixed flags (None without fixed
     blocks); wall particles of fixed water blocks are walls, not pore water: they get p^ (an output)
     and nothing else. one_soil: the material id when the scene has one soil material (then the
-    per-material constants are loop invariants), else None."""
+    per-material constants are loop invariants), else None. free_water, suspended, erodes (an eroding
+    bed with numerics.bed_shear = "log_law", bed_shear.py; None otherwise): the pairs of free water
+    (outside the bed) with the bed of an eroding soil (not suspended) carry no drag (bed_shear.py
+    gives them the wall shear instead); the buoyancy and the storage keep them."""
     three = is3d is not None
     dim = 3 if three else 2
     if x.shape[1] != dim or v.shape[1] != dim:
@@ -370,6 +389,7 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
             f0 = f1 = f2 = lam = 0.0
             den = num = q0 = q1 = q2 = g0 = g1 = g2 = 0.0
             phi = s0 = s1 = s2 = b0 = b1 = b2 = div = 0.0
+            x0 = x1 = x2 = xden = 0.0  # the free pairs' drag sums (one soil material), taken out after
             l0 = l1 = l2 = c00 = c01 = c02 = c11 = c12 = c22 = r0 = r1 = r2 = 0.0  # linear p^ only
             m0 = m1 = m2 = m3 = m4 = m5 = 0.0
             for s in range(first, last):
@@ -390,12 +410,20 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
                 w = cubic_spline_w(r, h, norm)
                 vw = vol_b * w
                 vf = vol_b * cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
-                if one_soil is None:
+                free = False
+                if free_water is not None:
+                    free = free_water[a] != 0 and suspended[b] == 0 and erodes[mb] != 0
+                if one_soil is None and not free:
                     kw = vw * drag[mb]  # K_ab / V_a
                     f0 += kw * u0
                     f1 += kw * u1
                     f2 += kw * u2
                     lam += kw
+                if one_soil is not None and free:
+                    x0 += vw * u0
+                    x1 += vw * u1
+                    x2 += vw * u2
+                    xden += vw
                 if drho is not None or one_soil is not None:
                     s0 += vw * u0  # the drag's sum with one soil material, and the storage's S
                     s1 += vw * u1
@@ -442,7 +470,7 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
                     div += vf * (u0 * d0 + u1 * d1 + u2 * d2)
             if one_soil is not None:  # C is a loop invariant: the drag from S = sum_b V_b W_ab u
                 kd = drag[one_soil]
-                f0, f1, f2, lam = kd * s0, kd * s1, kd * s2, kd * den
+                f0, f1, f2, lam = kd * (s0 - x0), kd * (s1 - x1), kd * (s2 - x2), kd * (den - xden)
             if pore is not None and one_soil is not None:
                 sol = solid[one_soil]
                 q0, q1, q2 = sol * b0, sol * b1, sol * b2
@@ -490,7 +518,8 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
 
 @kernel(parallel=True)
 def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag, solid, h, norm, acc,
-                    pore=None, is3d=None, wall=None, corr=None, chunks=None, vw=None, vf=None):  # fmt: skip
+                    pore=None, is3d=None, wall=None, corr=None, chunks=None, vw=None, vf=None,
+                    free_water=None, suspended=None, erodes=None):  # fmt: skip
     """Soil rows b, one loop over their water neighbours a: add sum_a F_ab / m_b (the pair force of
     the module docstring) with pore holding p^ on the water rows (seepage_on_water) and p~ on the
     soil rows (pore_pressure_at_soil); None in the seed formulation (no buoyancy):
@@ -501,7 +530,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag,
     walls, not pore water, and take no part in the coupling. corr: the water side's L_a (corrected
     mixture; None otherwise): the buoyancy's d becomes L_a d, as on the water side. vw, vf: the
     pairs' V_a W_ab and V_a W'/r that pore_pressure_at_soil wrote over the same list (mixture; None:
-    computed here)."""
+    computed here). free_water, suspended, erodes: as in seepage_on_water (free pairs carry no drag)."""
     three = is3d is not None
     dim = 3 if three else 2
     if x.shape[1] != dim or v.shape[1] != dim:
@@ -519,6 +548,9 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag,
             xb2 = x[b, 2] if is3d is not None else 0.0
             vb2 = v[b, 2] if is3d is not None else 0.0
             p_b = pore[b] if pore is not None else 0.0
+            bed_eroding = False  # b is bed of an eroding soil (free water gets the wall shear instead)
+            if free_water is not None:
+                bed_eroding = suspended[b] == 0 and erodes[material[b]] != 0
             den = w0 = w1 = w2 = g0 = g1 = g2 = 0.0
             for s in range(start[t], start[t + 1]):
                 a = index[s]
@@ -536,11 +568,15 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag,
                 else:
                     w_s = vw[s]
                     f_s = vf[s]
-                den += w_s
-                w0 += w_s * (vflat[xa] - vb0)
-                w1 += w_s * (vflat[xa + 1] - vb1)
-                if three:
-                    w2 += w_s * (vflat[xa + 2] - vb2)
+                free = False
+                if free_water is not None:
+                    free = free_water[a] != 0 and bed_eroding
+                if not free:  # free water over the bed: the wall shear instead (bed_shear.py)
+                    den += w_s
+                    w0 += w_s * (vflat[xa] - vb0)
+                    w1 += w_s * (vflat[xa + 1] - vb1)
+                    if three:
+                        w2 += w_s * (vflat[xa + 2] - vb2)
                 if pore is not None:
                     vfp = f_s * (pore[a] - p_b)
                     if corr is None:
@@ -647,6 +683,8 @@ class _Coupling(Term):
         if settings.walls:  # wall particles of fixed water blocks are walls, not pore water
             self.fields = {**self.fields, "fixed": FIXED}
             self.reads += ("fixed",)
+        if settings.free_water:
+            self.reads += ("free_water", "suspended")
         self.adds_to = ("acc",)
         drag = "C = n^2 gamma_w / k (Biot; Bui & Nguyen 2017)" if settings.mixture else "C = n gamma_w / k"
         equations = [
@@ -717,6 +755,8 @@ class SeepageOnWater(_Coupling):
             ps["p"] if mix else None, ps["pore_pressure"] if mix else None, ctx.is3d,
             ps["fixed"] if st.walls else None, st.one_soil, True if st.linear and mix else None,
             ps["pair_correction"] if st.corrected else None, st.kappa, thread_chunks(start),
+            ps["free_water"] if st.free_water else None, ps["suspended"] if st.free_water else None,
+            st.erodes,
         )  # fmt: skip
 
 
@@ -750,5 +790,6 @@ class SeepageOnSoil(_Coupling):
             nl.targets, start, index, ps["x"], ps["v"], ps["rho"], ps["mass"], vol, ps["material"], st.drag,
             st.solid, ctx.h, ctx.norm, ps["acc"], ps["pore_pressure"] if st.mixture else None, ctx.is3d,
             ps["fixed"] if st.walls else None, ps["pair_correction"] if st.corrected else None,
-            thread_chunks(start), vw, vf,
+            thread_chunks(start), vw, vf, ps["free_water"] if st.free_water else None,
+            ps["suspended"] if st.free_water else None, st.erodes,
         )  # fmt: skip

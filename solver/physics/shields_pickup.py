@@ -49,6 +49,7 @@ from ..sediment import (
     pickup_rate,
 )
 from ..term import Equation, Stage, Term
+from .bed_shear import SHEAR_WEIGHT, bed_shear_on, bed_shear_spec
 from .bed_surface import surface_limits
 
 SUSPENDED = FieldSpec(0, np.uint8, "1: soil picked up by the flow (no shear strength)", Mirror.SCALAR)
@@ -92,16 +93,26 @@ class SedimentTable:
 @kernel(parallel=True)
 def shields_pickup(targets, start, index, x, v, mass, rho, material, fixed, suspended, share, shields,
                    fraction, normal, stress_dev, d50, theta_cr, dstar, s_rel, rho_grain, rho_w, nu, g, dx, h,
-                   norm, dt, surface_limit, deposit_limit):  # fmt: skip
+                   norm, dt, surface_limit, deposit_limit, bed_shear=None, shear_weight=None,
+                   free=None):  # fmt: skip
     """The module doc's law for the owned soil rows `targets`, over their water neighbours. Writes
     shields (theta, 0 where not sampled), share, suspended, and zeroes the deviatoric stress of a
-    particle it suspends. fixed: the wall flags (None without fixed blocks: walls are not water)."""
+    particle it suspends. fixed: the wall flags (None without fixed blocks: walls are not water).
+    bed_shear, shear_weight (the bed-shear traction, bed_shear.py; None without): the traction
+    tau_b t_b the flow exerts on a bed-surface particle (t_b the direction of the sampled water's
+    mean tangential velocity relative to it, weights V_a W_ab) and the sum of W_ab over its free
+    pairs (free water above its top face, (x_a - x_b).n_b > dx/2; free: bed_shear.FreeWater), which
+    share the reaction."""
     dim = x.shape[1]
     w0 = cubic_spline_w(0.0, h, norm)
     for t in prange(targets.shape[0]):
         b = targets[t]
         m = material[b]
         shields[b] = 0.0
+        if shear_weight is not None:
+            shear_weight[b] = 0.0
+            for c in range(dim):
+                bed_shear[b, c] = 0.0
         if d50[m] <= 0.0:
             continue
         vol_b = mass[b] / rho[b]
@@ -115,7 +126,7 @@ def shields_pickup(targets, start, index, x, v, mass, rho, material, fixed, susp
         if n0 * n0 + n1 * n1 + n2 * n2 == 0.0:
             continue
         k_s = ROUGHNESS_PER_GRAIN * d50[m]
-        sum_w = sum_wu = 0.0
+        sum_w = sum_wu = free_w = tan0 = tan1 = tan2 = 0.0
         for q in range(start[t], start[t + 1]):
             a = index[q]
             if fixed is not None and fixed[a]:
@@ -124,11 +135,14 @@ def shields_pickup(targets, start, index, x, v, mass, rho, material, fixed, susp
             d1 = x[a, 1] - x[b, 1]
             d2 = x[a, 2] - x[b, 2] if dim == 3 else 0.0
             y = d0 * n0 + d1 * n1 + d2 * n2 - 0.5 * dx
-            if y < MIN_HEIGHT * dx:
+            if y <= 0.0:
                 continue
             r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            w = mass[a] / rho[a] * cubic_spline_w(r, h, norm)
-            if w <= 0.0:
+            kernel_w = cubic_spline_w(r, h, norm)
+            if free is not None and free[a] != 0:
+                free_w += kernel_w
+            w = mass[a] / rho[a] * kernel_w
+            if y < MIN_HEIGHT * dx or w <= 0.0:
                 continue
             u0 = v[a, 0] - v[b, 0]
             u1 = v[a, 1] - v[b, 1]
@@ -139,10 +153,21 @@ def shields_pickup(targets, start, index, x, v, mass, rho, material, fixed, susp
             us = bed_friction_velocity(ut, y, k_s, nu)
             sum_w += w
             sum_wu += w * us * us
+            tan0 += w * t0
+            tan1 += w * t1
+            tan2 += w * t2
         if sum_w <= 0.0:
             continue
         theta = rho_w * sum_wu / sum_w / ((rho_grain[m] - rho_w) * g * d50[m])
         shields[b] = theta
+        size = math.sqrt(tan0 * tan0 + tan1 * tan1 + tan2 * tan2)
+        if shear_weight is not None and not lifted and size > 0.0:
+            tau = rho_w * sum_wu / sum_w / size  # tau_b per unit of the summed tangential vector
+            shear_weight[b] = free_w
+            bed_shear[b, 0] = tau * tan0
+            bed_shear[b, 1] = tau * tan1
+            if dim == 3:
+                bed_shear[b, 2] = tau * tan2
         if lifted:
             if theta <= theta_cr[m]:
                 suspended[b] = 0  # deposited
@@ -179,6 +204,12 @@ class ShieldsPickup(Term):
         self.fields = {"suspended": SUSPENDED, "eroded_share": ERODED_SHARE, "shields": SHIELDS}
         self.reads = ("x", "v", "mass", "rho") + (("fixed",) if self.walls else ())
         self.writes = ("suspended", "eroded_share", "shields", "stress_dev")
+        self.traction = bed_shear_on(scene, materials)  # the wall shear for bed_shear.py
+        if self.traction:
+            self.fields = {**self.fields, "bed_shear": bed_shear_spec(scene.dim)}
+            self.fields["shear_weight"] = SHEAR_WEIGHT
+            self.writes += ("bed_shear", "shear_weight")
+            self.reads += ("free_water",)
         tb = self.table
         names = ", ".join(
             f"{materials.names[k]} (d50 {1e3 * tb.d50[k]:.3g} mm, theta_cr {tb.theta_cr[k]:.4f})" for k in ids
@@ -209,5 +240,6 @@ class ShieldsPickup(Term):
             ps["fixed"] if self.walls else None, ps["suspended"], ps["eroded_share"], ps["shields"],
             ps["bed_fraction"], ps["bed_normal"], ps["stress_dev"], tb.d50, tb.theta_cr, tb.dstar, tb.s,
             tb.rho_grain, tb.rho_w, tb.nu, tb.g, self.dx, ctx.h, ctx.norm, ctx.dt, self.surface_limit,
-            self.deposit_limit,
+            self.deposit_limit, ps["bed_shear"] if self.traction else None,
+            ps["shear_weight"] if self.traction else None, ps["free_water"] if self.traction else None,
         )  # fmt: skip

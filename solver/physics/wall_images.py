@@ -242,6 +242,8 @@ class ImageWalls:
                 refresh_image_positions(first, src, sign, offset, particles[name])
             elif rule is Mirror.VELOCITY:
                 refresh_image_velocities(first, src, self.velocity_signs(), particles[name])
+            elif rule is Mirror.DIRECTION:  # the free-slip mirror whatever the wall's kind
+                refresh_image_velocities(first, src, sign, particles[name])
             elif rule is Mirror.SCALAR:
                 refresh_image_scalar(first, src, particles[name])
             elif rule is Mirror.TENSOR:
