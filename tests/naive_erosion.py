@@ -109,3 +109,64 @@ def shields_pickup(soil, water, x, v, mass, rho, material, fixed, suspended, sha
             suspended[b], share[b] = 1, 0.0
             stress_dev[b] = 0.0
     return shields, share, suspended, stress_dev
+
+
+def free_water(water, soil, x, mass, rho, suspended, h, dim, limit):
+    """1 where the bed fraction over non-suspended soil is below limit (bed_shear.FreeWater)."""
+    out = np.zeros(len(x), dtype=np.uint8)
+    bed = [b for b in soil if not suspended[b]]
+    for a in water:
+        phi = sum(mass[b] / rho[b] * cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim) for b in bed)
+        out[a] = phi < limit
+    return out
+
+
+def wall_shear(soil, water, x, v, mass, rho, material, fixed, suspended, fraction, normal, free, mat, rho_w,
+               nu, dx, h, dim, surface_limit, min_height):  # fmt: skip
+    """(bed_shear, shear_weight): tau_b t_b and sum W over the free pairs above b (shields_pickup doc)."""
+    shear, weight = np.zeros((len(x), dim)), np.zeros(len(x))
+    for b in soil:
+        props = mat[material[b]]
+        if props is None or suspended[b] or fraction[b] >= surface_limit or not normal[b].any():
+            continue
+        us2, ws, tangents, free_w = [], [], [], 0.0
+        for a in water:
+            if fixed is not None and fixed[a]:
+                continue
+            d = x[a] - x[b]
+            y = d @ normal[b] - 0.5 * dx
+            kernel_w = float(cubic_spline(np.linalg.norm(d), h, dim))
+            if y <= 0:
+                continue
+            free_w += kernel_w if free[a] else 0.0
+            w = mass[a] / rho[a] * kernel_w
+            if y < min_height * dx or w <= 0:
+                continue
+            rel = v[a] - v[b]
+            tangential = rel - (rel @ normal[b]) * normal[b]
+            us2.append(friction_velocity(np.linalg.norm(tangential), y, 2.5 * props["d50"], nu) ** 2)
+            ws.append(w)
+            tangents.append(tangential)
+        if not ws:
+            continue
+        t = np.average(tangents, axis=0, weights=ws)
+        if np.linalg.norm(t) > 0:
+            shear[b] = rho_w * np.average(us2, weights=ws) * t / np.linalg.norm(t)
+            weight[b] = free_w
+    return shear, weight
+
+
+def wall_shear_accelerations(soil, water, x, mass, rho, fixed, free, shear, weight, normal, dx, h, dim):
+    """acc from the wall shear (bed_shear.py): -A_b tau_b t_b W_ab / weight_b / m_a on free water above
+    b, +A_b tau_b t_b / m_b on b."""
+    acc = np.zeros((len(x), dim))
+    for b in soil:
+        if weight[b] <= 0:
+            continue
+        area = (mass[b] / rho[b]) ** ((dim - 1) / dim)
+        acc[b] += area * shear[b] / mass[b]
+        for a in water:
+            if free[a] and not fixed[a] and (x[a] - x[b]) @ normal[b] > 0.5 * dx:
+                w = float(cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim))
+                acc[a] -= area * shear[b] * w / weight[b] / mass[a]
+    return acc

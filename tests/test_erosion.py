@@ -28,7 +28,10 @@ from solver.sediment import (
 from verification.analytic.scour_formulas import shields_critical
 
 NU, G, RHO_W, RHO_S = 1.0e-6, 9.81, 1000.0, 2650.0
-NAMES = {"bed surface", "shields pick-up"}
+NAMES = {"bed surface", "shields pick-up", "free water", "bed shear on water", "bed shear on soil"}
+FIELDS = {"suspended", "eroded_share", "shields", "bed_fraction", "bed_normal", "free_water", "bed_shear",
+          "shear_weight"}  # fmt: skip
+SHEAR = {"free water", "bed shear on water", "bed shear on soil"}
 
 
 # ---- grain-scale formulas ----------------------------------------------------------------------
@@ -97,18 +100,19 @@ def test_lattice_fractions_and_limits(dim):
 
 def bed_and_flow(rng, dim=2, n_side=8, dx=0.01):
     """A jittered bed (soil: material 1 erodes, 2 does not) under jittered water (material 0) with a
-    sheared flow, some bed suspended, some water flagged as wall."""
+    sheared flow above the bed and pore water in its top three rows, some bed suspended, some water
+    flagged as wall."""
     h = 1.3 * dx
     bed = disordered_lattice(n_side, dim, dx, rng)
     flow = disordered_lattice(n_side, dim, dx, rng)
-    flow[:, -1] += n_side * dx
+    flow[:, -1] += (n_side - 3) * dx  # its bottom three rows are pore water in the bed's top rows
     x = np.vstack([flow, bed])
     nw, ns = len(flow), len(bed)
     water, soil = np.arange(nw), np.arange(nw, nw + ns)
     material = np.zeros(nw + ns, dtype=np.int32)
     material[soil] = 1 + (rng.random(ns) < 0.2)
     v = rng.normal(0, 0.05, (nw + ns, dim))
-    v[water, 0] += 0.2 + 3.0 * (x[water, -1] - n_side * dx)  # a shear flow over the bed
+    v[water, 0] += np.maximum(0.2 + 3.0 * (x[water, -1] - n_side * dx), 0.0)  # a shear flow over the bed
     rho = np.where(material == 0, 1000.0, 1590.0) * (1 + rng.normal(0, 0.01, nw + ns))
     mass = np.where(material == 0, 1000.0, 1590.0) * dx**dim
     suspended = np.zeros(nw + ns, dtype=np.uint8)
@@ -125,6 +129,7 @@ def bed_and_flow(rng, dim=2, n_side=8, dx=0.01):
         fixed=fixed, h=h, dx=dx, dim=dim, norm=cubic_spline_normalisation(dim, h),
         soil_soil=cells.neighbour_list(x, soil.astype(np.int64), radius, phase, 1),
         soil_water=cells.neighbour_list(x, soil.astype(np.int64), radius, phase, 0),
+        water_soil=cells.neighbour_list(x, water.astype(np.int64), radius, phase, 1),
     )  # fmt: skip
 
 
@@ -213,16 +218,29 @@ def box(grain="grain_size = 5.0e-4\n", numerics=""):
 def test_the_erosion_terms_only_with_a_grain_size_water_and_the_default_scheme():
     eroding = build_plan(box())
     assert NAMES <= {t.name for t in eroding.terms}
-    assert {"suspended", "eroded_share", "shields", "bed_fraction", "bed_normal"} <= set(eroding.fields)
+    assert FIELDS <= set(eroding.fields)
     for scene in (box(grain=""), box(numerics='\n[numerics]\nscheme = "seed"\n'),
                   box(numerics='\n[numerics]\nerosion = "none"\n')):  # fmt: skip
         plan = build_plan(scene)
         assert not NAMES & {t.name for t in plan.terms} and NAMES <= set(plan.absent)
-        assert not {"suspended", "eroded_share", "shields", "bed_fraction", "bed_normal"} & set(plan.fields)
+        assert not FIELDS & set(plan.fields)
+    drag = build_plan(box(numerics='\n[numerics]\nbed_shear = "drag"\n'))  # erosion with the former interface
+    assert not SHEAR & {t.name for t in drag.terms} and {"bed surface", "shields pick-up"} <= {
+        t.name for t in drag.terms
+    }
+    assert not {"free_water", "bed_shear", "shear_weight"} & set(drag.fields)
     text = explain(eroding, box())
-    for expected in ("shields pick-up: soil <- water", "bed surface: soil <- soil",
-                     "Soulsby & Whitehouse (1997)", "van Rijn (1984)", "theta_cr 0.0308",
-                     "suspended"):  # fmt: skip
+    for expected in (
+        "shields pick-up: soil <- water",
+        "bed surface: soil <- soil",
+        "free water: water <- soil",
+        "bed shear on water: water <- soil",
+        "Soulsby & Whitehouse (1997)",
+        "van Rijn (1984)",
+        "theta_cr 0.0308",
+        "Launder & Spalding (1974)",
+        "suspended",
+    ):
         assert expected in text, expected
 
 
@@ -235,12 +253,18 @@ WATER_LINE = "typical_velocity = 2.0\n"  # the water material's last line in BOX
         ({GRAIN: GRAIN + "critical_shields = 0.05\n"}, "materials.sand.critical_shields", "needs grain_size"),
         ({GRAIN: GRAIN + "grain_size = -1.0e-3\n"}, "materials.sand.grain_size", "greater than 0"),
         ({"": '\n[output]\nfields = ["velocity", "shields"]\n'}, "output.fields", "nothing erodes"),
-        ({GRAIN: GRAIN + "grain_size = 5.0e-4\n", "": '\n[numerics]\nerosion = "grains"\n'},
-         "numerics.erosion", "'shields' or 'none'"),
-        ({GRAIN: GRAIN + "grain_size = 5.0e-4\n", WATER_LINE: WATER_LINE + "viscosity = 0.0\n"},
-         "materials.water.viscosity", "must be > 0"),
+        (
+            {GRAIN: GRAIN + "grain_size = 5.0e-4\n", "": '\n[numerics]\nerosion = "grains"\n'},
+            "numerics.erosion",
+            "'shields' or 'none'",
+        ),
+        (
+            {GRAIN: GRAIN + "grain_size = 5.0e-4\n", WATER_LINE: WATER_LINE + "viscosity = 0.0\n"},
+            "materials.water.viscosity",
+            "must be > 0",
+        ),
     ],
-)  # fmt: skip
+)
 def test_scene_refusals_name_the_key(tmp_path, edits, key, reason):
     """edits: replacements in BOX; the key "" appends its text."""
     text = BOX
@@ -329,10 +353,250 @@ def test_an_eroding_scene_writes_the_suspended_flags_and_the_scour_reads_the_bed
     top = x[:, 1] > 5 * dx
     grid = ScourGrid.for_layer(0.0, 0.2, 0.0, 0.2, dx, 1.3 * dx)
     flags = np.where(top & (x[:, 0] > 0.05) & (x[:, 0] < 0.15), 1, 0).astype(np.uint8)
-    snaps = [(0.0, {"x": x, "material": material, "suspended": np.zeros(len(x), np.uint8)}),
-             (1.0, {"x": x, "material": material, "suspended": flags}),
-             (2.0, {"x": x, "material": material})]  # fmt: skip
+    snaps = [
+        (0.0, {"x": x, "material": material, "suspended": np.zeros(len(x), np.uint8)}),
+        (1.0, {"x": x, "material": material, "suspended": flags}),
+        (2.0, {"x": x, "material": material}),
+    ]
     (m0, _), (m1, _), (m2, _) = scour_series(snaps, [1], grid)
     assert m0.depth == 0.0 and m2.depth == 0.0  # without the flags every soil particle is bed
     assert m1.depth == pytest.approx(dx, rel=0.05)  # a lattice row: the rule reads a flat bed's surface
     assert 0.05 < m1.x_deepest < 0.15
+
+
+# ---- the bed shear (solver/physics/bed_shear.py) -------------------------------------------------
+
+
+def _bed_shear_state(s):
+    """The bed-shear fields of bed_and_flow's state: free water, then the pick-up's tau_b t_b and weights."""
+    from solver.physics.bed_shear import free_water_flags
+
+    n, dim = len(s["x"]), s["dim"]
+    fraction, normal = _bed_surface(s)
+    surface, deposit = surface_limits(dim, 1.3)
+    free = np.full(n, 7, dtype=np.uint8)
+    nl = s["water_soil"]
+    free_water_flags(
+        nl.targets,
+        nl.start,
+        nl.index,
+        s["x"],
+        s["mass"],
+        s["rho"],
+        s["suspended"],
+        s["h"],
+        s["norm"],
+        deposit,
+        free,
+    )
+    shear, weight = np.full((n, dim), np.nan), np.full(n, np.nan)
+    d50 = np.array([0.0, 0.5e-3, 0.0])
+    nl = s["soil_water"]
+    shields_pickup(
+        nl.targets,
+        nl.start,
+        nl.index,
+        s["x"],
+        s["v"],
+        s["mass"],
+        s["rho"],
+        s["material"],
+        s["fixed"],
+        s["suspended"].copy(),
+        np.zeros(n),
+        np.zeros(n),
+        fraction,
+        normal,
+        np.zeros((n, 3 if dim == 2 else 6)),
+        d50,
+        np.array([0.0, 0.0308, 0.0]),
+        np.array([0.0, dimensionless_grain_size(5e-4, 2.65, NU, G), 0.0]),
+        np.array([0.0, 2.65, 0.0]),
+        np.array([0.0, RHO_S, 0.0]),
+        RHO_W,
+        NU,
+        G,
+        s["dx"],
+        s["h"],
+        s["norm"],
+        0.0,
+        surface,
+        deposit,
+        shear,
+        weight,
+        free,
+    )
+    return fraction, normal, free, shear, weight
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_free_water_and_wall_shear_match_twins(rng, dim):
+    """The free-water flags, the pick-up's tau_b t_b and weights, and the traction's accelerations against
+    the twins; the traction is equal and opposite (sum of m a is zero to round-off)."""
+    from solver.physics.bed_shear import bed_shear_on_soil, bed_shear_on_water
+
+    s = bed_and_flow(rng, dim, n_side=8 if dim == 2 else 5)
+    fraction, normal, free, shear, weight = _bed_shear_state(s)
+    water, soil = s["water"], s["soil"]
+    deposit = surface_limits(dim, 1.3)[1]
+    twin_free = naive_erosion.free_water(
+        water, soil, s["x"], s["mass"], s["rho"], s["suspended"], s["h"], dim, deposit
+    )
+    assert np.array_equal(free[water], twin_free[water])
+    assert 0 < free[water].sum() < len(water)  # the water's bottom rows reach into the bed's kernel
+    mat = [None, dict(d50=0.5e-3, theta_cr=0.0308, rho_s=RHO_S), None]
+    t_shear, t_weight = naive_erosion.wall_shear(
+        soil,
+        water,
+        s["x"],
+        s["v"],
+        s["mass"],
+        s["rho"],
+        s["material"],
+        s["fixed"],
+        s["suspended"],
+        fraction,
+        normal,
+        free,
+        mat,
+        RHO_W,
+        NU,
+        s["dx"],
+        s["h"],
+        dim,
+        surface_limits(dim, 1.3)[0],
+        MIN_HEIGHT,
+    )
+    assert np.allclose(weight[soil], t_weight[soil], rtol=1e-12, atol=0)
+    assert np.allclose(shear[soil], t_shear[soil], rtol=1e-7, atol=1e-14)
+    assert (weight[soil] > 0).sum() >= 5
+    acc = np.zeros((len(s["x"]), dim))
+    nl = s["water_soil"]
+    bed_shear_on_water(
+        nl.targets,
+        nl.start,
+        nl.index,
+        s["x"],
+        s["mass"],
+        s["rho"],
+        s["fixed"],
+        free,
+        shear,
+        weight,
+        normal,
+        s["dx"],
+        s["h"],
+        s["norm"],
+        acc,
+    )
+    bed_shear_on_soil(soil, s["mass"], s["rho"], shear, weight, acc)
+    expected = naive_erosion.wall_shear_accelerations(
+        soil,
+        water,
+        s["x"],
+        s["mass"],
+        s["rho"],
+        s["fixed"],
+        free,
+        shear,
+        weight,
+        normal,
+        s["dx"],
+        s["h"],
+        dim,
+    )
+    assert np.allclose(acc, expected, rtol=1e-10, atol=1e-14)
+    momentum = (s["mass"][:, None] * acc).sum(axis=0)
+    assert np.abs(momentum).max() <= 1e-12 * (s["mass"][:, None] * np.abs(acc)).sum()
+    assert np.abs(acc[soil]).max() > 0
+
+
+@pytest.mark.parametrize("one_soil", [None, 1])
+def test_free_water_pairs_carry_no_drag(rng, one_soil):
+    """The seepage kernels with the free-water flags differ from those without by exactly the drag of the
+    free pairs: V_a V_b C W_ab (v_a - v_b) on soil b of an eroding material, not suspended; buoyancy and
+    storage unchanged (the seed form here: drag only; one_soil: the loop-invariant path)."""
+    from naive import cubic_spline as w_kernel
+
+    from solver.physics.seepage import seepage_on_soil, seepage_on_water
+
+    s = bed_and_flow(rng, 2)
+    if one_soil is not None:
+        s["material"][s["soil"]] = 1
+    _, _, free, _, _ = _bed_shear_state(s)
+    n = len(s["x"])
+    vol = s["mass"] / s["rho"]
+    drag = np.array([0.0, 1.0e6, 2.0e6])
+    erodes = np.array([0, 1, 0], dtype=np.uint8)
+
+    def rates(flags):
+        acc = np.zeros((n, 2))
+        extra = (free, s["suspended"], erodes) if flags else (None, None, None)
+        nl = s["water_soil"]
+        seepage_on_water(
+            nl.targets,
+            *nl.unsigned(),
+            s["x"],
+            s["v"],
+            s["rho"],
+            s["mass"],
+            vol,
+            s["material"],
+            drag,
+            np.zeros(3),
+            np.full(3, 2650.0),
+            s["h"],
+            s["norm"],
+            acc,
+            None,
+            None,
+            None,
+            None,
+            None,
+            one_soil,
+            None,
+            None,
+            0.0,
+            None,
+            *extra,
+        )
+        nl = s["soil_water"]
+        seepage_on_soil(
+            nl.targets,
+            *nl.unsigned(),
+            s["x"],
+            s["v"],
+            s["rho"],
+            s["mass"],
+            vol,
+            s["material"],
+            drag,
+            np.zeros(3),
+            s["h"],
+            s["norm"],
+            acc,
+            None,
+            None,
+            None,
+            None,
+            None,
+            None,
+            None,
+            *extra,
+        )
+        return acc
+
+    diff = rates(True) - rates(False)
+    expected = np.zeros((n, 2))
+    for a in s["water"]:
+        if not free[a]:
+            continue
+        for b in s["soil"]:
+            if s["suspended"][b] or not erodes[s["material"][b]]:
+                continue
+            w = w_kernel(np.linalg.norm(s["x"][a] - s["x"][b]), s["h"], 2)
+            force_on_b = vol[a] * vol[b] * drag[s["material"][b]] * w * (s["v"][a] - s["v"][b])
+            expected[a] += force_on_b / s["mass"][a]  # the water no longer loses it
+            expected[b] -= force_on_b / s["mass"][b]
+    assert np.abs(expected).max() > 0
+    assert np.allclose(diff, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())

@@ -8,18 +8,22 @@ the height above the bed surface) of a friction velocity u* chosen so that the f
 theta = rho_w u*^2 / ((rho_s - rho_w) g d50) is `ratio` times theta_cr = 0.0308 (Soulsby & Whitehouse
 1997 for 0.5 mm quartz, D* = 12.6). The pore water and the skeleton start at rest.
 
-Measured over the bed's middle half (away from the side walls), over HOLD = 10 ms:
+Measured over the stretch SAMPLED of the bed (its ends 0.336 m from the end walls: the walls stop the
+imposed flow, and the news travels at the speed of sound, c = 20 m/s, 17 ms to the stretch), over
+HOLD = 10 ms:
   * the model's Shields number of the bed-surface particles at the first step against the imposed
-    theta (`estimate`): the estimator's error, with the law it inverts given exactly;
-  * onset: whether any eroded share grew during the hold. The onset bracket (largest ratio without
-    pick-up, smallest with) must lie within 10 % of theta_cr (the issue's tolerance);
+    theta (`estimate`): the estimator's error, with the law it inverts given exactly. Check: within
+    ESTIMATE_TOLERANCE, a tenth of the onset tolerance (the imposed flow is the law the estimator
+    inverts: what remains is the lattice's and the fixed point's round-off);
   * the model's theta / theta_imposed at the end of the hold (`held`). An imposed flow with no
     driving force decelerates by bed friction, d<u>/dt = -u*^2 / DEPTH: 0.03 % of <u> = 0.24 m/s in
-    10 ms here (0.06 % of theta);
-    the model's near-bed water decelerates faster, because free water within a kernel of the bed is
-    dragged as pore water (seepage drag C = n^2 gamma_w / k on every water-soil pair; the local
-    porosity formulation that would exempt it is not built: seepage_critical_gradient.py). The
-    figure is reported, not checked: it is what stands between this model and a sustained-flow onset.
+    10 ms here (0.06 % of theta). Check: within HELD_TOLERANCE, half the onset tolerance (an onset
+    read over the hold moves with theta's drift, and the other half is the ratio sweep's step);
+  * onset: whether any eroded share grew during the hold. Check: the onset bracket (largest ratio
+    without pick-up, smallest with) within 10 % of theta_cr (the issue's tolerance).
+The ablation (`DRAG_RATIO` with numerics.bed_shear = "drag", reported, not checked): the seepage
+drag on the free water over the bed, as before the bed shear (solver/physics/bed_shear.py), stops the
+first water row within milliseconds and takes a third of theta in 10 ms.
 
 resolution = particles over DEPTH (7, 10, 14: dx = 5, 3.5, 2.5 mm).
 """
@@ -44,9 +48,9 @@ HOLD = 0.01
 SAMPLES = 6  # times over the hold at which theta is read
 NU = 1.0e-6  # the water's kinematic viscosity (defaults.toml: 1e-3 Pa s / 1000 kg/m^3)
 ONSET_TOLERANCE = 0.10  # issue 24: onset within 10 % of the critical Shields number
-# the estimator's share of that budget: a tenth (error analysis: the imposed flow is the law the
-# estimator inverts, so what remains is the lattice's and the fixed point's round-off)
-ESTIMATE_TOLERANCE = 0.01
+ESTIMATE_TOLERANCE = 0.01  # a tenth of the onset tolerance (module doc)
+HELD_TOLERANCE = 0.05  # half of it (module doc)
+DRAG_RATIO = 1.05  # the ablation's imposed theta / theta_cr
 DEFAULT_RESOLUTION = 7
 STUDY_RESOLUTIONS = (7, 10, 14)
 CI_RATIOS = (0.9, 0.95, 1.05, 1.1)
@@ -77,7 +81,9 @@ def scene(resolution, end_time=HOLD, **numerics):
          "max": [LENGTH, BED + DEPTH], "hydrostatic": True},
     ]  # fmt: skip
     mats = {"water": sc.WATER, "sand": SAND}
-    return sc.scene("sediment_threshold", dx, end_time, [LENGTH, BED + DEPTH + 0.02], mats, blocks, **numerics)
+    return sc.scene(
+        "sediment_threshold", dx, end_time, [LENGTH, BED + DEPTH + 0.02], mats, blocks, **numerics
+    )
 
 
 def bed_under_log_law(resolution, ratio, end_time=HOLD, **numerics):
@@ -102,8 +108,8 @@ def middle(sim, rows):
     return rows[(x > SAMPLED[0] * LENGTH) & (x < SAMPLED[1] * LENGTH)]
 
 
-def run_one(resolution, ratio):
-    sim = bed_under_log_law(resolution, ratio)
+def run_one(resolution, ratio, **numerics):
+    sim = bed_under_log_law(resolution, ratio, **numerics)
     soil = middle(sim, sc.soil_rows(sim))
     theta_imposed = ratio * critical_shields()
 
@@ -135,16 +141,20 @@ def checks(runs):
     lo, hi = onset_bracket(runs)
     src = "issue 24: onset within 10 % of theta_cr (Soulsby & Whitehouse 1997)"
     worst = max(abs(r["estimate"] - 1.0) for r in runs)
+    drift = max(abs(r["held"] - 1.0) for r in runs)
     return [
         Check("1 - (largest theta / theta_cr without pick-up)", 1.0 - lo, ONSET_TOLERANCE, src),
         Check("(smallest theta / theta_cr with pick-up) - 1", hi - 1.0, ONSET_TOLERANCE, src),
         Check("estimator |theta_model / theta_imposed - 1| at the first step", worst, ESTIMATE_TOLERANCE,
-              "a tenth of the onset tolerance (error analysis in the module doc)"),
+              "a tenth of the onset tolerance (module doc)"),
+        Check(f"held |theta_model / theta_imposed - 1| after {1e3 * HOLD:g} ms", drift, HELD_TOLERANCE,
+              "half the onset tolerance (module doc; bed friction alone: 0.0006)"),
     ]  # fmt: skip
 
 
 def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=CI_RATIOS):
     runs = [run_one(resolution, r) for r in ratios]
+    drag = run_one(resolution, DRAG_RATIO, bed_shear="drag")
     res = CaseResult("sediment_threshold", resolution, runs[0]["particles"], sum(r["steps"] for r in runs),
                      sum(r["wall"] for r in runs), {"runs": runs},
                      cpu_time=sum(r["cpu"] for r in runs))  # fmt: skip
@@ -153,17 +163,21 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, ratios=CI_RATIOS):
     res.notes = [f"theta_cr = {critical_shields():.4f} (d50 {1e3 * D50:g} mm quartz); dx = {dx_mm:.2f} mm"]
     res.notes += [
         f"theta = {r['ratio']:g} theta_cr: first step reads {r['estimate']:.4f} of it over "
-        f"{r['surface_particles']} surface particles; after {1e3 * HOLD:g} ms {r['held']:.3f} (the interface "
-        f"drag, module doc); {'picked up' if r['picked_up'] else 'no pick-up'} (largest share "
-        f"{r['share_max']:.2e}); {r['steps']} steps, {r['wall']:.1f} s wall"
+        f"{r['surface_particles']} surface particles; after {1e3 * HOLD:g} ms {r['held']:.3f}; "
+        f"{'picked up' if r['picked_up'] else 'no pick-up'} (largest share {r['share_max']:.2e}); "
+        f"{r['steps']} steps, {r['wall']:.1f} s wall"
         for r in runs
     ]  # fmt: skip
+    res.notes.append(
+        f"ablation, bed_shear = 'drag' (the seepage drag on free water), theta = {DRAG_RATIO:g} theta_cr: "
+        f"after {1e3 * HOLD:g} ms {drag['held']:.3f} of the imposed theta (not checked)"
+    )
     if out_dir is not None:
-        res.figure = figure(runs, Path(out_dir) / f"sediment_threshold_r{resolution}.png")
+        res.figure = figure(runs, Path(out_dir) / f"sediment_threshold_r{resolution}.png", drag)
     return res
 
 
-def figure(runs, path):
+def figure(runs, path, drag=None):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -174,6 +188,9 @@ def figure(runs, path):
         label = f"imposed {r['ratio']:g} theta_cr" + (" (picked up)" if r["picked_up"] else "")
         ax.plot(1e3 * r["t"], r["theta_ratio"] * r["ratio"], "o-" if r["picked_up"] else "s--", mfc="none",
                 label=label)  # fmt: skip
+    if drag is not None:
+        ax.plot(1e3 * drag["t"], drag["theta_ratio"] * drag["ratio"], "x:", color="0.4",
+                label=f"imposed {drag['ratio']:g} theta_cr, bed_shear = 'drag' (ablation)")  # fmt: skip
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xlabel("t (ms)")
     ax.set_ylabel("model theta / theta_cr at the bed surface")
@@ -186,17 +203,20 @@ def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT):
     rows = []
     for resolution in resolutions:
         runs = [run_one(resolution, r) for r in NIGHTLY_RATIOS]
+        drag = run_one(resolution, DRAG_RATIO, bed_shear="drag")
         lo, hi = onset_bracket(runs)
         rows.append({"resolution": resolution, "dx_mm": 1e3 * runs[0]["dx"],
                      "particles": runs[0]["particles"], "steps_per_run": runs[0]["steps"], "onset_low": lo,
                      "onset_high": hi, "estimate_error": max(abs(r["estimate"] - 1.0) for r in runs),
-                     "held_theta_ratio": float(np.mean([r["held"] for r in runs])),
+                     "held_worst": max(abs(r["held"] - 1.0) for r in runs),
+                     "held_mean": float(np.mean([r["held"] for r in runs])), "held_drag": drag["held"],
                      "wall_time_s": sum(r["wall"] for r in runs),
                      "cpu_time_s": sum(r["cpu"] for r in runs)})  # fmt: skip
-        figure(runs, Path(out_dir) / f"sediment_threshold_r{resolution}.png")
+        figure(runs, Path(out_dir) / f"sediment_threshold_r{resolution}.png", drag)
     save_study(rows, out_dir, "resolution_study",
                note="Reproduce: `python -m verification.sediment_threshold --study`; "
-               f"{len(NIGHTLY_RATIOS)} runs of {1e3 * HOLD:g} ms per resolution, times summed; "
+               f"{len(NIGHTLY_RATIOS)} runs of {1e3 * HOLD:g} ms per resolution, times summed (the drag "
+               "ablation's run not included); "
                f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', 'default')}, "
                f"{machine_load()}")  # fmt: skip
     return rows
