@@ -5,8 +5,9 @@
 
 The saturated bed of bench_seepage_step.py (~10k soil particles, as many pore-water particles, a
 0.05 m pond; disordered), its sand with and without a grain size (0.5 mm): the whole step of each,
-and the two erosion terms alone (bed surface over soil neighbours, Shields pick-up over water
-neighbours) on the eroding state. Printed as a share of the saturated step without erosion. The
+and the five erosion terms alone (bed surface over soil neighbours; free water, the bed shear on
+water over their soil neighbours; Shields pick-up over water neighbours; the bed shear on soil) on the
+eroding state. Printed as a share of the saturated step without erosion. The
 pond is at rest, so the pick-up samples every surface particle's water and finds theta = 0: the
 cost of the pass, not of an active bed (the per-pair work is the same).
 """
@@ -20,7 +21,7 @@ from bench_seepage_step import bed
 
 from verification import seepage_common as sc
 
-EROSION_TERMS = ("bed surface", "shields pick-up")
+EROSION_TERMS = ("bed surface", "free water", "shields pick-up", "bed shear on water", "bed shear on soil")
 D50 = 5e-4
 _results = {}
 
