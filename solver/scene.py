@@ -792,7 +792,8 @@ def _default_fields_for_the_phases(raw: dict, merged: dict):
     """The default output fields include the water pressure; a scene without water that did not
     choose its fields gets the defaults without it (choosing 'pressure' there is refused). An eroding
     scene (water, a soil with a grain_size, numerics.erosion = "shields") that did not choose gets
-    'suspended' too: the scour measure reads the bed without the soil the flow has picked up."""
+    'suspended' and 'eroded_share' too: the scour measure reads the bed without the soil the flow has
+    picked up or worn away."""
     chose = isinstance(raw.get("output"), dict) and "fields" in raw["output"]
     materials = merged.get("materials")
     if chose or not isinstance(materials, dict) or not isinstance(merged.get("output"), dict):
@@ -806,8 +807,8 @@ def _default_fields_for_the_phases(raw: dict, merged: dict):
         merged["output"]["fields"] = [f for f in fields if f != "pressure"]
     numerics = merged.get("numerics") if isinstance(merged.get("numerics"), dict) else {}
     grains = any(m.get("model") == "soil" and m.get("grain_size") is not None for m in mats)
-    if water and grains and numerics.get("erosion") == "shields" and "suspended" not in fields:
-        merged["output"]["fields"] = fields + ["suspended"]
+    if water and grains and numerics.get("erosion") == "shields":
+        merged["output"]["fields"] = fields + [f for f in ("suspended", "eroded_share") if f not in fields]
 
 
 def pydantic_validate(model, value):

@@ -344,7 +344,8 @@ def test_an_eroding_scene_writes_the_suspended_flags_and_the_scour_reads_the_bed
     scour surface leaves suspended soil out: a bed with its top row suspended reads a dx lower."""
     from solver.output.scour import ScourGrid, scour_series
 
-    assert "suspended" in box().output.fields and "suspended" not in box(grain="").output.fields
+    assert {"suspended", "eroded_share"} <= set(box().output.fields)
+    assert "suspended" not in box(grain="").output.fields
     assert "suspended" not in box(numerics='\n[numerics]\nerosion = "none"\n').output.fields
     dx = 0.01
     xs, zs = np.meshgrid((np.arange(20) + 0.5) * dx, (np.arange(6) + 0.5) * dx)
@@ -362,6 +363,15 @@ def test_an_eroding_scene_writes_the_suspended_flags_and_the_scour_reads_the_bed
     assert m0.depth == 0.0 and m2.depth == 0.0  # without the flags every soil particle is bed
     assert m1.depth == pytest.approx(dx, rel=0.05)  # a lattice row: the rule reads a flat bed's surface
     assert 0.05 < m1.x_deepest < 0.15
+    # the worn share thins the surface particles continuously: monotone in the share, a row at 1
+    depths = []
+    for worn in (0.0, 0.25, 0.5, 0.75, 1.0):
+        share = np.where(flags == 1, worn, 0.0)
+        snap = {"x": x, "material": material, "suspended": np.zeros(len(x), np.uint8), "eroded_share": share}
+        depths.append(scour_series([snaps[0], (1.0, snap)], [1], grid)[1][0].depth)
+    assert depths[0] == 0.0 and all(b > a for a, b in zip(depths, depths[1:]))
+    assert depths[-1] == pytest.approx(m1.depth, rel=1e-9)  # fully worn = suspended
+    assert 0.25 * dx < depths[2] < 0.75 * dx
 
 
 # ---- the bed shear (solver/physics/bed_shear.py) -------------------------------------------------

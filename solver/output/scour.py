@@ -52,9 +52,11 @@ class ScourGrid:
         )
 
 
-def surface_profile(x_soil: np.ndarray, grid: ScourGrid) -> np.ndarray:
-    """z_s at each bin centre from soil particle positions (n, 2)."""
-    pts = _with_mirrors(np.asarray(x_soil, float), grid)
+def surface_profile(x_soil: np.ndarray, grid: ScourGrid, remaining=None) -> np.ndarray:
+    """z_s at each bin centre from soil particle positions (n, 2). remaining (n,): the share of each
+    particle's volume still bed (1 - its worn share, docs/erosion.md), so a surface particle the flow
+    is wearing away lowers z_s continuously, by a whole row when it is gone; None: all of it."""
+    pts = _with_mirrors(np.asarray(x_soil, float), grid, remaining)
     vol = grid.dx**2
     reach = 2.0 * grid.h
     dz = grid.dx / SAMPLES_PER_DX
@@ -66,7 +68,7 @@ def surface_profile(x_soil: np.ndarray, grid: ScourGrid) -> np.ndarray:
             out[k] = grid.z_base
             continue
         r = np.hypot(xc - near[None, :, 0], z[:, None] - near[None, :, 1])
-        phi = vol * kernel_values(r, grid.h, 2).sum(axis=1)
+        phi = vol * (kernel_values(r, grid.h, 2) * near[None, :, 2]).sum(axis=1)
         below = np.flatnonzero(phi < 0.5)
         if not len(below):
             out[k] = z[-1]
@@ -79,9 +81,12 @@ def surface_profile(x_soil: np.ndarray, grid: ScourGrid) -> np.ndarray:
     return out
 
 
-def _with_mirrors(pts, grid):
-    """The particles plus their images across the base and the end walls (and the corners)."""
+def _with_mirrors(pts, grid, remaining=None):
+    """The particles plus their images across the base and the end walls (and the corners), as rows
+    (x, z, remaining volume share)."""
     reach = 2.0 * grid.h
+    share = np.ones(len(pts)) if remaining is None else np.asarray(remaining, float)
+    pts = np.c_[pts[:, :2], share]
     sets = [pts]
     base = pts[pts[:, 1] - grid.z_base < reach].copy()
     base[:, 1] = 2.0 * grid.z_base - base[:, 1]
@@ -120,13 +125,16 @@ def measure(z0: np.ndarray, z: np.ndarray, grid: ScourGrid, t: float) -> ScourMe
 def scour_series(snapshots, soil_ids, grid: ScourGrid):
     """[(ScourMeasure, z_s)] for snapshots [(t, {"x": ..., "material": ..., "suspended": ...})]; soil_ids:
     soil material ids. With "suspended" (an eroding scene that writes it, docs/erosion.md) the surface
-    is the bed's: soil the flow has picked up is not bed, wherever it still is."""
+    is the bed's: soil the flow has picked up is not bed, wherever it still is; with "eroded_share"
+    the worn part of a surface particle is not bed either (surface_profile's `remaining`)."""
     out, z0 = [], None
     for t, fields in snapshots:
         soil = np.isin(fields["material"], soil_ids)
         if fields.get("suspended") is not None:
             soil &= fields["suspended"] == 0
-        z = surface_profile(fields["x"][soil][:, :2], grid)
+        worn = fields.get("eroded_share")
+        remaining = None if worn is None else np.clip(1.0 - worn[soil], 0.0, 1.0)
+        z = surface_profile(fields["x"][soil][:, :2], grid, remaining)
         if z0 is None:
             z0 = z
         out.append((measure(z0, z, grid, t), z))
@@ -161,7 +169,15 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
     soil_ids = [k for k, m in enumerate(scene.materials.values()) if m.model == "soil"]
     series = scour_series(
         [
-            (t, {"x": f["position"], "material": f["material"], "suspended": f.get("suspended")})
+            (
+                t,
+                {
+                    "x": f["position"],
+                    "material": f["material"],
+                    "suspended": f.get("suspended"),
+                    "eroded_share": f.get("eroded_share"),
+                },
+            )  # fmt: skip
             for t, f in read_series(out_dir / "particles.h5")
         ],
         soil_ids,
