@@ -296,3 +296,44 @@ def test_seed_scheme_is_the_perfectly_plastic_collapse_bit_for_bit():
         finals.append((ps["x"][order].copy(), ps["stress_dev"][order].copy()))
     np.testing.assert_array_equal(finals[0][0], finals[1][0])
     np.testing.assert_array_equal(finals[0][1], finals[1][1])
+
+
+# ---- the Bagnold profile of an inclined layer (verification/granular_incline.py) -------------------------
+
+
+def test_bagnold_reference_is_mu_of_i_everywhere():
+    """The reference itself: I_zeta by hand (25 deg, Jop et al.'s beads: 0.279 x 0.0844 / 0.1756 = 0.134),
+    the surface speed by hand (2/3 x 0.1342 x sqrt(0.6 x 9.81 x cos 25) x 0.04^1.5 / 0.004 = 0.413 m/s), and
+    the profile's shear rate giving mu(I) = tan(zeta) at every depth (GDR MiDi 2004)."""
+    from verification import granular_incline as gi
+
+    assert gi.inertial_number_at_slope() == pytest.approx(0.1342, abs=1e-4)
+    assert gi.bagnold(gi.H) == pytest.approx(0.4133, abs=1e-4)
+    z, eps = np.linspace(0.001, 0.039, 50), 1e-7
+    rate = (gi.bagnold(z + eps) - gi.bagnold(z - eps)) / (2 * eps)  # central difference: error ~ eps^2
+    p = gi.SOLID_FRACTION * gi.RHO_GRAIN * gi.G * np.cos(np.radians(gi.ZETA)) * (gi.H - z)
+    inertial = rate * gi.D / np.sqrt(p / gi.RHO_GRAIN)
+    mu = nv.mu_of_i(inertial, gi.mu_s(), gi.mu_s() + gi.FRICTION_INCREMENT, gi.I0)
+    np.testing.assert_allclose(mu, np.tan(np.radians(gi.ZETA)), rtol=1e-7)
+
+
+def test_granular_incline_holds_the_bagnold_layer_at_4mm(tmp_path):
+    """The verification case in CI size (dx = 4 mm, 0.2 s): the mu(I) layer holds its Bagnold state
+    (effective friction, profile); the perfectly plastic ablation fails both checks by 10x and more."""
+    from verification import granular_incline as gi
+
+    res = gi.run(gi.DEFAULT_RESOLUTION, out_dir=tmp_path)
+    assert res.passed, "\n".join(c.line() for c in res.checks)
+    assert res.figure.exists()
+    plastic = res.series["perfectly_plastic"]
+    assert abs(plastic["friction_error"]) > 5 * gi.FRICTION_TOLERANCE
+    assert plastic["profile_rms"] > 5 * gi.PROFILE_TOLERANCE
+
+
+@pytest.mark.nightly
+def test_granular_incline_resolution_study(tmp_path):
+    from verification import granular_incline as gi
+    from verification.common import study_failures
+
+    rows = gi.study(out_dir=tmp_path)
+    assert not study_failures(rows)
