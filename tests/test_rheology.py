@@ -298,6 +298,17 @@ def test_seed_scheme_is_the_perfectly_plastic_collapse_bit_for_bit():
     np.testing.assert_array_equal(finals[0][1], finals[1][1])
 
 
+@pytest.fixture
+def one_thread():
+    """One Numba thread, as the restart's subprocess-free run (tests/test_restart.py's fixture)."""
+    import numba
+
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(before)
+
+
 # ---- the Bagnold profile of an inclined layer (verification/granular_incline.py) -------------------------
 
 
@@ -337,3 +348,37 @@ def test_granular_incline_resolution_study(tmp_path):
 
     rows = gi.study(out_dir=tmp_path)
     assert not study_failures(rows)
+
+
+@pytest.mark.usefixtures("one_thread")
+def test_mu_of_i_restart_is_bit_for_bit(tmp_path):
+    """The shear rate is a particle field, so a checkpoint carries it: a μ(I) column continued from a
+    mid-run checkpoint gives the uninterrupted run's snapshots and last checkpoint bit for bit."""
+    import shutil
+
+    import h5py
+    from test_restart import (
+        COLUMN,
+        COLUMN_SET,
+        _names,
+        _scene_file,
+        assert_same_checkpoint,
+        assert_same_series,
+    )
+
+    from scoursph.cli import main
+    from solver.run import run_scene
+    from solver.scene import load_scene
+
+    sets = [*COLUMN_SET, 'materials.bars.rheology="mu_I"', "materials.bars.grain_size=0.001"]
+    scene_path = _scene_file(tmp_path, COLUMN, sets)
+    ref = tmp_path / "ref"
+    run_scene(load_scene(scene_path), ref, quiet=True)
+    names = _names(ref)
+    with h5py.File(ref / "checkpoints" / names[0], "r") as f:
+        assert "shear_rate" in f["particles"] and np.any(f["particles"]["shear_rate"][:] > 0)
+    copy = tmp_path / "copy"
+    shutil.copytree(ref, copy)
+    assert main(["run", str(scene_path), "--restart", str(copy), "--checkpoint", names[0], "--quiet"]) == 0
+    assert_same_series(ref, copy)
+    assert_same_checkpoint(ref / "checkpoints" / names[-1], copy / "checkpoints" / names[-1])
