@@ -14,8 +14,8 @@ velocity u(z), p(z) from the density (eq. 17 inverted), s_xy = tan(zeta) p, the 
 components zero. A steady solution stays put; what the case measures is whether the SPH layer holds it.
 Its ends do not: the front runs out and the tail thins, and the news travels inwards, so the layer is
 read over its middle CORE (0.35-0.65 of its length, 0.35 m from either end), over HOLD = 0.2 s (the
-core of a 1 m layer and of a 2 m one agreed to 0.4 % at 0.2 s and parted after 0.3 s in prototype runs at E = 1 MPa:
-docs/rheology.md).
+core of a 1 m layer and of a 2 m one agreed to 0.4 % at 0.2 s and parted after 0.3 s in prototype runs
+at E = 1 MPa: docs/rheology.md).
 A perfectly plastic layer (the ablation) accelerates at g (sin(zeta) - mu_s cos(zeta)) = 0.75 m/s^2 and
 leaves the profile by 35 % of the surface speed over the hold (RMS at 4 mm).
 
