@@ -46,13 +46,26 @@ class SoilConstants:
     k_c: np.ndarray
     alpha_psi: np.ndarray  # same fit with the dilatancy angle (non-associated flow)
     yield_model: np.ndarray  # int32, YieldModel
+    # mu(I) once yielded (docs/rheology.md; Jop et al. 2006): mu_2 - mu_s (0: perfectly plastic), I_0, and
+    # d50 sqrt(rho_grain), so that I = gamma_dot d50 sqrt(rho_grain) / sqrt(p)
+    friction_increment: np.ndarray
+    inertial_number_i0: np.ndarray
+    grain_inertia: np.ndarray
+
+    @property
+    def rate_dependent(self):
+        """True if any soil flows with mu(I) (then the rates compute the shear rate)."""
+        return bool(np.any(self.friction_increment > 0.0))
 
 
 def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
     cols = {
         k: np.zeros(len(names))
-        for k in ("bulk", "shear", "tan_phi", "cohesion", "alpha_phi", "k_c", "alpha_psi")
-    }
+        for k in (
+            "bulk", "shear", "tan_phi", "cohesion", "alpha_phi", "k_c", "alpha_psi",
+            "friction_increment", "inertial_number_i0", "grain_inertia",
+        )
+    }  # fmt: skip
     model = np.zeros(len(names), dtype=np.int32)
     any_soil = False
     for k, name in enumerate(names):
@@ -70,6 +83,10 @@ def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
         cols["k_c"][k] = 3.0 * mat.cohesion / np.sqrt(9.0 + 12.0 * tphi**2)
         cols["alpha_psi"][k] = tpsi / np.sqrt(9.0 + 12.0 * tpsi**2)
         model[k] = YieldModel[mat.yield_model.upper()]
+        if mat.rheology == "mu_I" and scene.numerics.rheology == "material":
+            cols["friction_increment"][k] = mat.friction_increment
+            cols["inertial_number_i0"][k] = mat.inertial_number_i0
+            cols["grain_inertia"][k] = mat.grain_size * np.sqrt(mat.grain_density)
     return SoilConstants(yield_model=model, **cols) if any_soil else None
 
 

@@ -150,9 +150,10 @@ class Water(Strict):
 
 
 class Soil(Strict):
-    """Elasto-perfectly plastic soil: sigma = -p delta + s (seed eq. 12), s by Hooke's law with
-    the Jaumann rate (13)-(15), p = K (rho/rho0 - 1) (17), yield by Mohr-Coulomb (16, seed) or
-    Drucker-Prager with non-associated flow (Bui et al. 2008), or none (elastic, for checks)."""
+    """Elasto-plastic soil: sigma = -p delta + s (seed eq. 12), s by Hooke's law with the Jaumann
+    rate (13)-(15), p = K (rho/rho0 - 1) (17), yield by Mohr-Coulomb (16, seed) or Drucker-Prager
+    with non-associated flow (Bui et al. 2008), or none (elastic, for checks); once yielded
+    perfectly plastic (the seed's) or with the rate-dependent friction mu(I) (docs/rheology.md)."""
 
     model: Literal["soil"]
     density: Positive
@@ -173,6 +174,18 @@ class Soil(Strict):
     # it is given. critical_shields: None = Soulsby & Whitehouse (1997) from d50; a value overrides it
     grain_size: Positive | None = None
     critical_shields: Positive | None = None
+    # the yielded soil's rheology (solver/physics/soil_stress.py, docs/rheology.md): "perfectly_plastic"
+    # (seed eq. 16; Bui et al. 2008) or "mu_I", a rate-dependent friction mu(I) = mu_s + friction_increment
+    # / (inertial_number_i0 / I + 1), I = gamma_dot d50 / sqrt(p / rho_grain) (Jop, Forterre & Pouliquen
+    # 2006); mu_I needs grain_size. numerics.rheology = "perfectly_plastic" (the seed's scheme) overrides it
+    rheology: Literal["perfectly_plastic", "mu_I"] = "perfectly_plastic"
+    friction_increment: NonNegative = 0.26  # mu_2 - mu_s (defaults.toml: Jop et al. 2005)
+    inertial_number_i0: Positive = 0.279  # I_0 (defaults.toml: Jop et al. 2005)
+
+    @property
+    def grain_density(self):
+        """rho_grain of the inertial number: density / (1 - n) with a porosity, else the density itself."""
+        return self.density / (1.0 - self.porosity) if self.porosity is not None else self.density
 
     @property
     def shear_modulus(self):
@@ -290,6 +303,7 @@ SCHEMES = {
         "density_diffusion": "none",
         "wall_repulsion": False,
         "erosion": "none",
+        "rheology": "perfectly_plastic",
     },
 }
 """What each numerics.scheme sets. Precedence: defaults.toml < the preset < the scene's own keys."""
@@ -344,6 +358,9 @@ class Numerics(Strict):
     # between the free water and an eroding bed: "log_law" (the wall shear of the log law in place of the
     # seepage drag, solver/physics/bed_shear.py) or "drag" (the seepage drag, as on pore water)
     bed_shear: Literal["log_law", "drag"] = "log_law"
+    # the yielded soil's rheology: "material" (each soil's own `rheology`) or "perfectly_plastic" (every soil
+    # elastic-perfectly plastic, the seed's eq. 16 / Bui et al. 2008, whatever its `rheology` says)
+    rheology: Literal["material", "perfectly_plastic"] = "material"
 
 
 class Output(Strict):
@@ -557,6 +574,7 @@ def _check_consistency(s: Scene):
     if np.any(times < 0) or np.any(times > s.scene.end_time * (1 + 1e-12)):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
     _check_seepage(s)
+    _check_rheology(s)
     for key, reason in check_open_boundaries(s):
         raise _Inconsistent(key, reason)
     _check_resources(s)
@@ -580,6 +598,24 @@ def _erodes(s: Scene) -> bool:
         and any(isinstance(m, Water) for m in mats)
         and any(isinstance(m, Soil) and m.grain_size is not None for m in mats)
     )
+
+
+def _check_rheology(s: Scene):
+    """mu(I) needs the grain size of its inertial number and a yield surface to raise."""
+    for name, mat in s.materials.items():
+        if not isinstance(mat, Soil) or mat.rheology != "mu_I":
+            continue
+        if mat.grain_size is None:
+            raise _Inconsistent(
+                f"materials.{name}.grain_size",
+                "required by rheology = 'mu_I' (the inertial number is per grain size: I = gamma_dot d50 / "
+                "sqrt(p / rho_grain))",
+            )
+        if mat.yield_model == "elastic":
+            raise _Inconsistent(
+                f"materials.{name}.rheology",
+                "'mu_I' raises the yield surface of a yielding soil, and yield_model = 'elastic' has none",
+            )
 
 
 def _check_seepage(s: Scene):

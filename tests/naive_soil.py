@@ -26,16 +26,31 @@ def jaumann(s6, grad_v):
     return to_voigt(np.einsum("ag,bg->ab", s, R) + np.einsum("gb,ag->ab", s, R))
 
 
-def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0):
+def mu_of_i(inertial_number, mu_s, mu_2, i0):
+    """The friction law of Jop, Forterre & Pouliquen (2006): mu(I) = mu_s + (mu_2 - mu_s) / (I_0 / I + 1)."""
+    return mu_s + (mu_2 - mu_s) / (i0 / inertial_number + 1.0)
+
+
+def rate_friction(p, gamma_dot, d_mu, i0, d50, rho_grain):
+    """mu(I) - mu_s at I = gamma_dot d50 / sqrt(p / rho_grain) (GDR MiDi 2004), written from the
+    definitions; 0 without confinement or shear."""
+    if p <= 0 or gamma_dot <= 0 or d_mu <= 0:
+        return 0.0
+    inertial_number = gamma_dot * d50 / np.sqrt(p / rho_grain)
+    return mu_of_i(inertial_number, 0.0, d_mu, i0)
+
+
+def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0, mu_r=0.0):
     """Mohr-Coulomb scale-back (seed eq. 16) or Drucker-Prager return (Bui et al. 2008),
-    from the definitions; returns (p, s6)."""
+    from the definitions; returns (p, s6). mu_r = mu(I) - mu_s raises either surface by mu_r p
+    (docs/rheology.md) where p > 0, held at the trial p during the return."""
     s = to_matrix(s6)
     j2 = 0.5 * np.sum(s * s)
     tphi, tpsi = np.tan(np.radians(phi_deg)), np.tan(np.radians(psi_deg))
     if model == "mohr_coulomb":
         if tphi > 0:
             p = max(p, -c / tphi)
-        sf = c + p * tphi
+        sf = max(c + p * tphi, 0.0) + mu_r * max(p, 0.0)
         return p, (to_voigt(s * sf / np.sqrt(j2)) if np.sqrt(j2) > sf else s6.copy())
     a_phi = tphi / np.sqrt(9 + 12 * tphi**2)
     k_c = 3 * c / np.sqrt(9 + 12 * tphi**2)
@@ -43,10 +58,12 @@ def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0):
     I1 = -3 * p
     if -a_phi * I1 + k_c < 0:  # beyond the apex: tension cracking
         return k_c / (3 * a_phi) * -1.0, np.zeros(6)
-    f = a_phi * I1 + np.sqrt(j2) - k_c
+    mu_r = mu_r if p > 0 else 0.0
+    f = a_phi * I1 + np.sqrt(j2) - k_c - mu_r * p
     if f <= 0:
         return p, s6.copy()
-    dl = f / (G + 9 * K * a_phi * a_psi)
+    # f after the return: sqrt(J2) - G dl - k_c - (3 a_phi + mu_r)(p + 3 K a_psi dl) = 0
+    dl = f / (G + 3 * K * a_psi * (3 * a_phi + mu_r))
     # sigma_new = sigma_trial - D : dl (a_psi delta + s / (2 sqrt(J2)))
     sig = -p * np.eye(3) + s
     sig_new = sig - dl * (3 * K * a_psi * np.eye(3) + G * s / np.sqrt(j2))
@@ -85,6 +102,22 @@ def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55
         dev = eps - np.trace(eps) / 3 * np.eye(3)
         ds[i] = to_voigt(2 * G * dev) + jaumann(s[i], L)
     return drho, acc, ds
+
+
+def shear_rates(x, v, rho, mass, h):
+    """All-pairs |gamma_dot| = sqrt(2 e':e'), e' the deviatoric part of the symmetric SPH velocity
+    gradient (seed eq. 14; Liu & Liu 2003), for every particle: the shear rate of mu(I)."""
+    n, dim = x.shape
+    out = np.zeros(n)
+    for i in range(n):
+        L = np.zeros((3, 3))
+        for j in range(n):
+            if i != j and np.linalg.norm(x[i] - x[j]) < 2 * h:
+                L[:dim, :dim] += mass[j] / rho[j] * np.outer(v[j] - v[i], grad_w(x[i], x[j], h, dim))
+        eps = 0.5 * (L + L.T)
+        dev = eps - np.trace(eps) / 3 * np.eye(3)
+        out[i] = np.sqrt(2.0 * np.sum(dev * dev))
+    return out
 
 
 def artificial_stress(p, s6, rho, eps, dim=2):

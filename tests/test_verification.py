@@ -98,7 +98,10 @@ def test_column_collapse_matches_experiment_at_ci_resolution(collapse_ci):
     reason="known discrepancy since the tension-crack density fix (issue 14): the runout falls short "
     "of the experiment's 0.442 m by 47 / 59 / 30 mm at 5 / 4 / 2.5 mm, beyond the 3 mm digitisation "
     "plus the numerical uncertainty of a non-monotone study (half the range, 14.5 mm; ITTC 2017); the "
-    "one-particle toe layer breaks at 2.5 mm (verification/results/column_collapse/README.md)",
+    "deposit's body stops early (61-67 % of the experiment's area beyond 0.30 m). Issue 24: mu(I) with the "
+    "bars' size only adds friction, a Coulomb floor at their friction angle lets grains slide on (+8 % "
+    "at 2.5 mm), and without the soil's artificial viscosity the runout is +20-33 % "
+    "(verification/results/column_collapse/README.md, 'What makes the runout short')",
 )
 def test_column_collapse_runout(collapse_ci):
     check = next(c for c in collapse_ci.checks if c.metric == RUNOUT)

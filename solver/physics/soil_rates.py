@@ -4,6 +4,7 @@ continuity        over soil neighbours                                     seed 
 momentum          sigma = -p delta + s, eq. (20) without seepage            seed eqs. (12), (20)
 artificial visc.  Monaghan, alpha = beta = 1 for soil                       seed eq. (19)
 deviatoric rate   ds/dt = 2G (eps') + s R^T + R s  (Jaumann)               seed eqs. (13)-(15)
+shear rate        gamma_dot = sqrt(2 eps':eps'), for mu(I) soils only        Jop et al. (2006)
 """
 
 from __future__ import annotations
@@ -33,6 +34,9 @@ def jaumann(s0, s1, s2, s3, s4, s5, w01, w02, w12):
     j02 = w02 * (s2 - s0) + w01 * s4 - w12 * s3
     return j00, j11, j22, j01, j12, j02
 
+
+SHEAR_RATE = "shear_rate"
+SHEAR_RATE_FIELD = FieldSpec(0, np.float64, "shear rate sqrt(2 eps':eps') of a mu(I) soil (1/s)")
 
 # columns of the per-row table that soil_pair_terms prepares for the pair loop
 Q00, Q11, Q01, VOL, MASS, Q22, Q12, Q02 = range(8)
@@ -64,6 +68,7 @@ def soil_rates(
     drho, acc, ds,
     av_alpha=None, av_beta=None,  # Monaghan artificial viscosity, seed eq. (19)
     is3d=None, mixed=None,
+    shear_rate=None,  # mu(I): gamma_dot per row, from the same velocity gradient (docs/rheology.md)
 ):  # fmt: skip
     """Continuity (6), momentum (20) without seepage, and the Hooke-Jaumann rate (13)-(15).
     Adds into drho and acc; writes ds. The velocity gradient is that of velocity_gradient.py.
@@ -182,6 +187,13 @@ def soil_rates(
         ds[i, 3] = two_g * 0.5 * (g01 + g10) + j01
         ds[i, 4] = two_g * 0.5 * (g12 + g21) + j12
         ds[i, 5] = two_g * 0.5 * (g02 + g20) + j02
+        if shear_rate is not None:
+            # |gamma_dot| = sqrt(2 eps':eps') of the deviatoric strain rate (eq. 14): the shear rate of
+            # the inertial number (GDR MiDi 2004; Jop et al. 2006), = |du/dy| in simple shear
+            d00, d11, d22 = g00 - third, g11 - third, g22 - third
+            e01, e12, e02 = 0.5 * (g01 + g10), 0.5 * (g12 + g21), 0.5 * (g02 + g20)
+            dd = d00 * d00 + d11 * d11 + d22 * d22 + 2.0 * (e01 * e01 + e12 * e12 + e02 * e02)
+            shear_rate[i] = np.sqrt(2.0 * dd)
 
 
 class SoilRates(Term):
@@ -205,6 +217,7 @@ class SoilRates(Term):
         self.av_alpha = materials.av_alpha if av else None
         self.av_beta = materials.av_beta if av else None
         self.mixed = True if len(soil) > 1 else None
+        self.rate_dependent = materials.soil.rate_dependent  # mu(I): write the shear rate
         self._pair = np.empty((0, PAIR_COLUMNS))
         self.fields = {
             "rho_half": RHO_HALF,
@@ -218,6 +231,9 @@ class SoilRates(Term):
         self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev")
         self.adds_to = ("acc", "drho")
         self.writes = ("dstress",)
+        if self.rate_dependent:  # read on owned rows only, by the return mapping (soil_stress.py)
+            self.fields[SHEAR_RATE] = SHEAR_RATE_FIELD
+            self.writes += (SHEAR_RATE,)
         equations = [
             Equation("continuity", "seed eq. (6)"),
             Equation("stress divergence", "seed eqs. (12), (20)"),
@@ -226,6 +242,10 @@ class SoilRates(Term):
         if av:
             equations.append(
                 Equation("Monaghan artificial viscosity", "seed eq. (19), alpha = beta = 1 for soil")
+            )
+        if self.rate_dependent:
+            equations.append(
+                Equation("shear rate sqrt(2 eps':eps') for mu(I)", "Jop et al. (2006); GDR MiDi (2004)")
             )
         self.equations = tuple(equations)
 
@@ -257,4 +277,5 @@ class SoilRates(Term):
             self.av_beta,
             ctx.is3d,
             self.mixed,
+            ps[SHEAR_RATE] if self.rate_dependent else None,
         )

@@ -5,6 +5,9 @@
   yield             Mohr-Coulomb scale-back sqrt(J2) <= c + p tan(phi)       seed eq. (16)
                     or Drucker-Prager, plane-strain fit, non-associated flow,
                     tension cracking and scale-back                           Bui et al. (2008)
+  once yielded      perfectly plastic (the above), or mu(I): the friction     Jop, Forterre & Pouliquen
+                    rises with the inertial number, + (mu_2 - mu_s) I/(I+I_0)  (2006); GDR MiDi (2004)
+                    times p, I = gamma_dot d50 / sqrt(p / rho_grain)          (docs/rheology.md)
 
 Pressure p is positive in compression. Stress tensors are 6 components (solver/tensors.py);
 2D is plane strain (s_zz is kept and evolves). Two terms: the state at step n before the pair
@@ -24,6 +27,7 @@ from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
 from .shields_pickup import erosion_materials
+from .soil_rates import SHEAR_RATE  # the field SoilRates writes for mu(I) soils
 
 MOHR_COULOMB = int(YieldModel.MOHR_COULOMB)  # plain ints: compile-time constants in the kernels
 DRUCKER_PRAGER = int(YieldModel.DRUCKER_PRAGER)
@@ -52,7 +56,23 @@ def _scaled(r, s0, s1, s2, s3, s4, s5):
 
 
 @kernel
-def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi):
+def rate_friction(p, shear_rate, friction_increment, i0, grain_inertia):
+    """mu(I) - mu_s = (mu_2 - mu_s) / (I_0 / I + 1) = (mu_2 - mu_s) I / (I + I_0) (Jop, Forterre & Pouliquen
+    2006), I = gamma_dot d50 / sqrt(p / rho_grain) (GDR MiDi 2004), with grain_inertia = d50 sqrt(rho_grain):
+    I sqrt(p) = gamma_dot grain_inertia, so the ratio needs no division by p. Zero without confinement
+    (p <= 0: the friction law has no strength to raise), at rest, and for a perfectly plastic soil
+    (friction_increment = 0)."""
+    if friction_increment <= 0.0 or p <= 0.0 or shear_rate <= 0.0:
+        return 0.0
+    a = shear_rate * grain_inertia
+    return friction_increment * a / (a + i0 * np.sqrt(p))
+
+
+@kernel
+def return_map(
+    p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion, alpha_phi, k_c, alpha_psi,
+    friction_increment=0.0, i0=1.0, grain_inertia=0.0, shear_rate=0.0,
+):  # fmt: skip
     """Admissible (p, s) from a trial state; returns (p, s0..s5, dvol, dcrack): dvol the plastic
     volumetric strain increment (dilation positive), dcrack the part of it that is tension cracking.
 
@@ -68,6 +88,15 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
       otherwise f > 0 -> plastic multiplier dl = f / (G + 9 K alpha_phi alpha_psi) of the
       non-associated potential g = alpha_psi I1 + sqrt(J2): sqrt(J2) -= G dl, p += 3 K alpha_psi dl
       (plastic dilation 3 alpha_psi dl raises p in a confined state); lands on f = 0 exactly.
+    mu(I) (friction_increment > 0; docs/rheology.md): the admissible sqrt(J2) of either surface gains
+    mu_r p, mu_r = rate_friction(p, shear_rate, ...) = mu(I) - mu_s, at the shear rate of the last rates
+    pass: the rate-dependent yield surface of a consistency viscoplasticity (Wang, Sluys & de Borst
+    1997), which makes the steady simple shear of a yielded soil sqrt(J2) = (mu_s + mu_r) p + c, the
+    local mu(I) law (Jop et al. 2006) with mu_s the yield model's static friction (tan(phi), or
+    3 alpha_phi for the Drucker-Prager fit). Below the static surface nothing changes: the skeleton
+    stays elastic. mu_r is held at its trial-p value during the Drucker-Prager return, so the
+    multiplier dl = f / (G + 9 K alpha_phi alpha_psi + 3 K alpha_psi mu_r) still lands on the raised
+    f = 0 (the dilation raises p, and with it both frictions).
     """
     dvol = 0.0
     dcrack = 0.0
@@ -76,6 +105,9 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
             dvol = dcrack = (-cohesion / tan_phi - p) / bulk
             p = -cohesion / tan_phi
         sf = max(cohesion + p * tan_phi, 0.0)
+        mu_r = rate_friction(p, shear_rate, friction_increment, i0, grain_inertia)
+        if mu_r > 0.0:
+            sf += mu_r * p
         j = sqrt_j2(s0, s1, s2, s3, s4, s5)
         if j > sf:
             s0, s1, s2, s3, s4, s5 = _scaled(sf / j, s0, s1, s2, s3, s4, s5)
@@ -88,8 +120,13 @@ def return_map(p, s0, s1, s2, s3, s4, s5, model, bulk, shear, tan_phi, cohesion,
         else:
             j = sqrt_j2(s0, s1, s2, s3, s4, s5)
             f = j - k_c - 3.0 * alpha_phi * p
+            stiffness = shear + 9.0 * bulk * alpha_phi * alpha_psi
+            mu_r = rate_friction(p, shear_rate, friction_increment, i0, grain_inertia)
+            if mu_r > 0.0:  # a branch, not a sum with 0: the perfectly plastic return stays bit for bit
+                f -= mu_r * p
+                stiffness += 3.0 * bulk * alpha_psi * mu_r
             if f > 0.0:
-                dl = f / (shear + 9.0 * bulk * alpha_phi * alpha_psi)
+                dl = f / stiffness
                 p += 3.0 * bulk * alpha_psi * dl
                 dvol = 3.0 * alpha_psi * dl
                 s0, s1, s2, s3, s4, s5 = _scaled(max(j - shear * dl, 0.0) / j, s0, s1, s2, s3, s4, s5)
@@ -115,6 +152,7 @@ def soil_stress_state(
     eps_vp=None,
     update_history=False,
     suspended=None,
+    rate=None,
 ):
     """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
     return mapping; writes p to mean_stress and the admissible s in place. With
@@ -131,13 +169,18 @@ def soil_stress_state(
     issue-14 column collapses ended so. p evolves exactly as before (continuity's rate does not
     depend on rho_i); only the density used as a volume and in eqs. (19), (20) changes.
     suspended (erosion, solver/physics/shields_pickup.py; None without): soil the flow has picked up
-    has no shear strength, s = 0, and keeps p."""
+    has no shear strength, s = 0, and keeps p.
+    rate (mu(I), None without: the perfectly plastic return of the seed): the tuple (friction_increment,
+    inertial_number_i0, grain_inertia) per material and the shear rate per row (SoilRates)."""
     for t in prange(rows.shape[0]):
         i = rows[t]
         m = material[i]
         e = rho[i] / rho0[m] - 1.0
         if eps_vp is not None:
             e += eps_vp[i]
+        d_mu, i0, inertia, rate_i = 0.0, 1.0, 0.0, 0.0
+        if rate is not None and (suspended is None or suspended[i] == 0):  # suspended soil: no rheology
+            d_mu, i0, inertia, rate_i = rate[0][m], rate[1][m], rate[2][m], rate[3][i]
         p, a0, a1, a2, a3, a4, a5, dvol, dcrack = return_map(
             bulk[m] * e,
             s[i, 0],
@@ -154,6 +197,10 @@ def soil_stress_state(
             alpha_phi[m],
             k_c[m],
             alpha_psi[m],
+            d_mu,
+            i0,
+            inertia,
+            rate_i,
         )
         mean_stress[i] = p
         if suspended is not None and suspended[i] != 0:
@@ -171,8 +218,9 @@ def soil_stress_state(
                 eps_vp[i] += dvol
 
 
-def yield_excess(rows, mean_stress, s, material, soil):
-    """f / (scale) for the given rows: > 0 means outside the yield surface (NumPy; diagnostics, tests)."""
+def yield_excess(rows, mean_stress, s, material, soil, shear_rate=None):
+    """f / (scale) for the given rows: > 0 means outside the yield surface (NumPy; diagnostics, tests).
+    With shear_rate (mu(I) soils), the surface raised by mu(I) - mu_s at that rate (rate_friction)."""
     m = material[rows]
     p = mean_stress[rows]
     ss = s[rows]
@@ -185,6 +233,12 @@ def yield_excess(rows, mean_stress, s, material, soil):
         soil.k_c[m] + 3.0 * soil.alpha_phi[m] * p,
         soil.cohesion[m] + soil.tan_phi[m] * p,
     )
+    if shear_rate is not None:
+        a = shear_rate[rows] * soil.grain_inertia[m]
+        root = soil.inertial_number_i0[m] * np.sqrt(np.maximum(p, 0.0))
+        flowing = (p > 0) & (a > 0) & (soil.friction_increment[m] > 0)
+        mu_r = np.where(flowing, soil.friction_increment[m] * a / np.where(flowing, a + root, 1.0), 0.0)
+        limit = limit + mu_r * p
     scale = np.maximum(np.abs(p), 1.0) * np.maximum(soil.tan_phi[m], 1e-3) + soil.cohesion[m]
     return np.where(model == YieldModel.ELASTIC, -1.0, (j - limit) / scale)
 
@@ -208,10 +262,13 @@ class Constitution:
         )
         soil = materials.ids_of_phase(Phase.SOIL)
         self.plastic = any(s.yield_model[k] != YieldModel.ELASTIC for k in soil)
+        self.rate_dependent = s.rate_dependent  # mu(I): the shear rate of SoilRates raises the surface
+        self.rate_constants = (s.friction_increment, s.inertial_number_i0, s.grain_inertia)
 
     def apply(self, ctx, rho, stress, update_history):
         """p from rho (eq. 17) and the return mapping of `stress`, in place."""
         ps = ctx.particles
+        rate = (*self.rate_constants, ps[SHEAR_RATE]) if self.rate_dependent else None
         soil_stress_state(
             ctx.rows[Phase.SOIL].view(np.uint64),  # unsigned: no negative-index wrap-around (6 % of the pass)
             ps[rho],
@@ -223,7 +280,30 @@ class Constitution:
             ps["eps_vp"] if self.plastic else None,
             update_history,
             ps["suspended"] if self.erodes else None,
+            rate,
         )
+
+
+def mu_i_equations(constitution):
+    if not constitution.rate_dependent:
+        return ()
+    return (
+        Equation(
+            "mu(I) once yielded: sqrt(J2) <= static + (mu_2 - mu_s) I / (I + I_0) p",
+            "Jop, Forterre & Pouliquen (2006); GDR MiDi (2004)",
+        ),
+    )
+
+
+def mu_i_lines(constitution, names):
+    """--explain: each mu(I) soil's mu_2 - mu_s, I_0 and d50 sqrt(rho_grain)."""
+    d_mu, i0, inertia = constitution.rate_constants
+    return [
+        f"mu(I) {names[k]}: mu_2 - mu_s = {d_mu[k]:g}, I_0 = {i0[k]:g}, d50 sqrt(rho_grain) = "
+        f"{inertia[k]:.4g} m (kg/m^3)^0.5"
+        for k in range(len(names))
+        if d_mu[k] > 0.0
+    ]
 
 
 class SoilStressState(Term):
@@ -239,6 +319,7 @@ class SoilStressState(Term):
     def __init__(self, scene, materials):
         super().__init__()
         self.constitution = Constitution(materials, bool(erosion_materials(scene, materials)))
+        self.names = materials.names
         self.fields = dict(STRESS_FIELDS)
         if self.constitution.plastic:
             self.fields["eps_vp"] = EPS_VP
@@ -252,7 +333,10 @@ class SoilStressState(Term):
         self.equations = (
             Equation("mean stress", "seed eq. (17)"),
             Equation("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager"),
-        )
+        ) + mu_i_equations(self.constitution)
+
+    def explain(self):
+        return mu_i_lines(self.constitution, self.names)
 
     def run(self, ctx):
         self.constitution.apply(ctx, "rho", "stress_dev", False)
@@ -282,7 +366,7 @@ class SoilReturnMapping(Term):
         )
         self.equations = (
             Equation("return mapping of s at n+1/2", "seed eqs. (16), (27); Bui et al. (2008)"),
-        )
+        ) + mu_i_equations(self.constitution)
 
     def run(self, ctx):
         self.constitution.apply(ctx, "rho_half", "stress_dev_half", True)
