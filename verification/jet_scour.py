@@ -97,10 +97,13 @@ def raw_scene(resolution, end_time, output_times=None):
     }  # fmt: skip
 
 
-def scene(resolution, end_time):
+def scene(resolution, end_time, **sand):
+    """The scene; `sand`: keys replaced in the sand's material (e.g. critical_shields)."""
     from solver.scene import parse_scene
 
-    return parse_scene(raw_scene(resolution, end_time), "<verification jet_scour>")
+    raw = raw_scene(resolution, end_time)
+    raw["materials"]["sand"] = dict(raw["materials"]["sand"], **sand)
+    return parse_scene(raw, "<verification jet_scour>")
 
 
 # ------------------------------------------------------------------------------------ the run
@@ -147,6 +150,39 @@ def run_series(resolution, end_time=T_END, every=SAMPLE_EVERY):
             "eroded_area": np.array([m.eroded_area for m, _ in series]),
             "surface": np.array([z for _, z in series]), "x_bins": grid(resolution, sim.scene.h).x_bins,
             "theta_max": np.array(theta), "water_particles": np.array(water)}  # fmt: skip
+
+
+# ------------------------------------------------------------------------------- diagnosis
+FIXED_BED_THRESHOLD = 10.0  # theta_cr set far above any theta the jet reaches: the bed stays put
+
+
+def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
+    """The bed's Shields number under the jet on a bed that does not erode (the sand's critical
+    Shields number raised to FIXED_BED_THRESHOLD; theta is still computed): per x-bin of width dx the
+    largest theta / theta_cr of the sand's surface particles, averaged over the sample times in
+    `window`. It separates the flow's bed shear at each spacing from the bed's evolution."""
+    from solver.simulation import Simulation
+
+    sim = Simulation(scene(resolution, end_time, critical_shields=FIXED_BED_THRESHOLD))
+    soil = sc.soil_rows(sim)
+    dx = HALF_SLOT / resolution
+    edges = np.arange(0.0, LENGTH + 0.5 * dx, dx)
+    theta_cr = critical_shields()
+    times = np.round(np.arange(window[0], end_time + 1e-9, every), 9)
+    profiles = []
+
+    def observe(s):
+        x = s.particles["x"][soil, 0]
+        th = s.particles["shields"][soil] / theta_cr
+        k = np.clip(np.digitize(x, edges) - 1, 0, len(edges) - 2)
+        prof = np.zeros(len(edges) - 1)
+        np.maximum.at(prof, k, th)
+        profiles.append(prof)
+
+    _, wall, cpu = sc.run_timed(sim, times, observe)
+    mean = np.mean(profiles, axis=0)
+    return {"resolution": resolution, "dx": dx, "x": 0.5 * (edges[:-1] + edges[1:]), "theta": mean,
+            "wall": wall, "cpu": cpu, "steps": sim.step_count}  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------- checks
