@@ -164,7 +164,6 @@ def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
     from solver.simulation import Simulation
 
     sim = Simulation(scene(resolution, end_time, critical_shields=FIXED_BED_THRESHOLD))
-    soil = sc.soil_rows(sim)
     dx = HALF_SLOT / resolution
     edges = np.arange(0.0, LENGTH + 0.5 * dx, dx)
     theta_cr = critical_shields()
@@ -172,6 +171,7 @@ def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
     profiles = []
 
     def observe(s):
+        soil = sc.soil_rows(s)  # rows now: the particles are re-sorted into cell order as they move
         x = s.particles["x"][soil, 0]
         th = s.particles["shields"][soil] / theta_cr
         k = np.clip(np.digitize(x, edges) - 1, 0, len(edges) - 2)
@@ -183,6 +183,39 @@ def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
     mean = np.mean(profiles, axis=0)
     return {"resolution": resolution, "dx": dx, "x": 0.5 * (edges[:-1] + edges[1:]), "theta": mean,
             "wall": wall, "cpu": cpu, "steps": sim.step_count}  # fmt: skip
+
+
+def picked_up_against_measured(resolution, end_time=0.7, every=0.1):
+    """Where the hole's soil went: the area the erosion law has picked up (suspended particles'
+    whole area plus the worn share of the others, each particle standing for dx^2) against the area
+    the scour measure finds eroded and deposited. Picked-up area well below the eroded one means the
+    hole is dug by the skeleton's own deformation (the soil yielding and being pushed aside), not by
+    the pick-up law."""
+    from solver.output.scour import measure, surface_profile
+    from solver.simulation import Simulation
+
+    sim = Simulation(scene(resolution, end_time))
+    g = grid(resolution, sim.scene.h)
+    area = g.dx**2
+    rows = []
+
+    def observe(s):
+        ps = s.particles
+        soil = sc.soil_rows(s)  # rows now: the particles are re-sorted into cell order as they move
+        susp = ps["suspended"][soil] != 0
+        share = np.clip(ps["eroded_share"][soil], 0.0, 1.0)
+        z = surface_profile(ps["x"][soil][~susp, :2], g, 1.0 - share[~susp])
+        rows.append((s.t, z, area * (susp.sum() + share[~susp].sum()), int(susp.sum())))
+
+    times = np.round(np.arange(0.0, end_time + 1e-9, every), 9)
+    _, wall, cpu = sc.run_timed(sim, times, observe)
+    z0 = rows[0][1]
+    ms = [measure(z0, z, g, t) for t, z, _, _ in rows]
+    return {"resolution": resolution, "t": times, "depth": np.array([m.depth for m in ms]),
+            "eroded": np.array([m.eroded_area for m in ms]),
+            "deposited": np.array([m.deposited_area for m in ms]),
+            "picked_up": np.array([r[2] for r in rows]), "suspended": np.array([r[3] for r in rows]),
+            "wall": wall, "cpu": cpu}  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------- checks
