@@ -160,7 +160,9 @@ def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
     """The bed's Shields number under the jet on a bed that does not erode (the sand's critical
     Shields number raised to FIXED_BED_THRESHOLD; theta is still computed): per x-bin of width dx the
     largest theta / theta_cr of the sand's surface particles, averaged over the sample times in
-    `window`. It separates the flow's bed shear at each spacing from the bed's evolution."""
+    `window`. It separates the flow's bed shear at each spacing from the bed's evolution. Also the
+    scour measure's d at the end: with no pick-up, any hole is the skeleton's own deformation."""
+    from solver.output.scour import scour_series
     from solver.simulation import Simulation
 
     sim = Simulation(scene(resolution, end_time, critical_shields=FIXED_BED_THRESHOLD))
@@ -179,10 +181,15 @@ def fixed_bed_shear(resolution, end_time=0.6, window=(0.3, 0.6), every=0.05):
         np.maximum.at(prof, k, th)
         profiles.append(prof)
 
+    sim.step()
+    first = snapshot(sim)
     _, wall, cpu = sc.run_timed(sim, times, observe)
+    soil_id = list(sim.scene.materials).index("sand")
+    (_, _), (end, _) = scour_series([first, snapshot(sim)], [soil_id], grid(resolution, sim.scene.h))
     mean = np.mean(profiles, axis=0)
     return {"resolution": resolution, "dx": dx, "x": 0.5 * (edges[:-1] + edges[1:]), "theta": mean,
-            "wall": wall, "cpu": cpu, "steps": sim.step_count}  # fmt: skip
+            "depth_end": end.depth, "x_deepest_end": end.x_deepest, "deposited_end": end.deposited_area,
+            "eroded_end": end.eroded_area, "wall": wall, "cpu": cpu, "steps": sim.step_count}  # fmt: skip
 
 
 def picked_up_against_measured(resolution, end_time=0.7, every=0.1):
