@@ -30,6 +30,7 @@ CASES = {
     "overflow_nappe_rigid_bed": "verification.overflow_nappe_rigid_bed",  # issue 11 item 8, vs OpenFOAM
     "sediment_threshold": "verification.sediment_threshold",  # issue 24 item 3, Shields onset
     "granular_incline": "verification.granular_incline",  # issue 24 item 1, mu(I) Bagnold profile
+    "jet_scour": "verification.jet_scour",  # issue 24 item 3, plane jet scour depth against time
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out
 NIGHTLY_CASES = {
