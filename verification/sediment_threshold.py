@@ -110,11 +110,14 @@ def middle(sim, rows):
 
 def run_one(resolution, ratio, **numerics):
     sim = bed_under_log_law(resolution, ratio, **numerics)
-    soil = middle(sim, sc.soil_rows(sim))
+    sampled = sim.particles["id"][middle(sim, sc.soil_rows(sim))]  # by id: rows are re-sorted at rebuilds
     theta_imposed = ratio * critical_shields()
 
+    def rows_now(s):
+        return np.flatnonzero(np.isin(s.particles.owned("id"), sampled))
+
     def observe(s):
-        sh = s.particles["shields"][soil]
+        sh = s.particles["shields"][rows_now(s)]
         return float(sh[sh > 0].mean() / theta_imposed) if (sh > 0).any() else np.nan, int((sh > 0).sum())
 
     sim.step()  # the first step: the model's reading of the imposed flow
@@ -122,6 +125,7 @@ def run_one(resolution, ratio, **numerics):
     times = np.linspace(0.0, HOLD, SAMPLES)
     obs, wall, cpu = sc.run_timed(sim, times, observe)
     ps = sim.particles
+    soil = rows_now(sim)
     share = ps["eroded_share"][soil]
     return {"ratio": ratio, "dx": DEPTH / resolution, "particles": ps.n_owned, "steps": sim.step_count,
             "wall": wall, "cpu": cpu, "estimate": first, "surface_particles": surface, "t": times,
