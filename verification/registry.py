@@ -29,6 +29,7 @@ CASES = {
     "seepage_sheet_pile": "verification.seepage_sheet_pile",
     "overflow_nappe_rigid_bed": "verification.overflow_nappe_rigid_bed",  # issue 11 item 8, vs OpenFOAM
     "sediment_threshold": "verification.sediment_threshold",  # issue 24 item 3, Shields onset
+    "mobile_bed_dam_break": "verification.mobile_bed_dam_break",  # issue 24 item 3, Spinewine & Zech set-up
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out
 NIGHTLY_CASES = {
