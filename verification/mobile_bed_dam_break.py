@@ -266,8 +266,9 @@ def run(resolution=DEFAULT_RESOLUTION, out_dir=None, times=TIMES):
 
 
 def figure(runs, path):
-    """Free surface and bed at each sample time, every resolution of `runs` ({resolution: (mobile, rigid)}),
-    with Ritter's solution; the finest's rigid floor dotted."""
+    """Left: free surface and bed at each sample time, every resolution of `runs` ({resolution: (mobile,
+    rigid)}), with Ritter's solution and the finest's rigid floor (dotted). Right: the bed's change
+    z_b(t) - z_b(0) in mm, where the left panels cannot show it."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -276,27 +277,62 @@ def figure(runs, path):
     x = common_grid()
     finest = max(runs)
     times = [s["t"] for s in runs[finest][0]["samples"]]
-    fig, axes = plt.subplots(len(times), 1, figsize=(11, 2.4 * len(times) + 0.6), sharex=True, squeeze=False)
-    for ax, k in zip(axes[:, 0], range(len(times))):
-        t = times[k]
+    fig, axes = plt.subplots(len(times), 2, figsize=(14, 2.6 * len(times) + 0.6), sharex="col", squeeze=False,
+                             gridspec_kw={"width_ratios": [3, 2]})  # fmt: skip
+    for k, t in enumerate(times):
+        ax, ax_b = axes[k]
         for j, res in enumerate(sorted(runs)):
             mobile, rigid = runs[res]
             s = mobile["samples"][k]
             lab = f"dx = {1e3 * spacing(res):.0f} mm"
             ax.plot(x, BED + s["z_w"], "-", color=f"C{j}", lw=1.2, label=f"free surface, {lab}")
             ax.plot(x, BED + s["z_b"], "-", color=f"C{j}", lw=2.0, alpha=0.6, label=f"bed, {lab}")
+            ax_b.plot(x, 1e3 * (s["z_b"] - mobile["initial"]["z_b"]), "-", color=f"C{j}", lw=1.2, label=lab)
             if res == finest:
                 ax.plot(x, BED + rigid["samples"][k]["z_w"], ":", color="0.3", lw=1.0,
                         label=f"rigid free-slip floor, {lab}")  # fmt: skip
         ax.plot(x, BED + ritter_depth(x, t), "k--", lw=0.8, label="Ritter (1892)")
+        for a in (ax, ax_b):
+            a.axvline(0.0, color="0.6", lw=0.6)
+            a.grid(alpha=0.3)
         ax.axhline(BED, color="0.6", lw=0.6)
-        ax.axvline(0.0, color="0.6", lw=0.6)
         ax.set(ylabel="z (m)", ylim=(0.0, BED + H0 + 0.03), title=f"t = {t:g} s")
-        ax.grid(alpha=0.3)
+        ax_b.axhline(0.0, color="0.6", lw=0.6)
+        ax_b.set(ylabel="bed change (mm)", title=f"bed z_b(t) - z_b(0), t = {t:g} s", xlim=(-0.5, 1.0))
     axes[0, 0].legend(fontsize=6, ncol=3)
-    axes[-1, 0].set_xlabel("x from the gate (m)")
+    axes[0, 1].legend(fontsize=7)
+    for a in axes[-1]:
+        a.set_xlabel("x from the gate (m)")
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def runs_from_profiles(path):
+    """{resolution: (mobile, rigid)} from the profiles a study wrote (write_profiles), for figure()."""
+    import csv
+
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+
+    def column(name):
+        return np.array([float(r[name]) for r in rows])
+
+    out = {}
+    for res in STUDY_RESOLUTIONS:
+        tag = f"dx{1e3 * spacing(res):.0f}mm"
+        if f"{tag}_bed_t0" not in rows[0]:
+            continue
+        stem = f"{tag}_bed_t"
+        times = sorted(float(k[len(stem) :]) for k in rows[0] if k.startswith(stem) and k != f"{stem}0")
+        mobile = {
+            "initial": {"z_b": column(f"{stem}0")},
+            "samples": [
+                {"t": t, "z_b": column(f"{stem}{t:g}"), "z_w": column(f"{tag}_surface_t{t:g}")} for t in times
+            ],
+        }
+        rigid = {"samples": [{"t": t, "z_w": column(f"{tag}_rigid_surface_t{t:g}")} for t in times]}
+        out[res] = (mobile, rigid)
+    return out
 
 
 def study(resolutions=STUDY_RESOLUTIONS, out_dir=OUT, times=TIMES):
