@@ -75,5 +75,7 @@ def test_pore_water_reaches_the_stream_and_is_released(dam_break_10mm):
     assert len(released) > 0  # pore water (mass n rho_w V) now free water
     still = water[ps["water_fraction"][water] < 1.0]
     assert (ps["free_water"][still] == 0).all()  # every pore particle outside the bed was released
-    assert ps["p"][water].min() > -0.1 * TAIT_B, ps["p"][water].min()  # no particle near -B
+    # no tension beyond what water can hold: gauge pressure above -1 atm (cavitation near the vapour
+    # pressure); escaped pore water kept at its pore reference read -B = -196 kPa before the release
+    assert ps["p"][water].min() > -101325.0, ps["p"][water].min()
     assert n_pore == pytest.approx(ps["water_fraction"][still].max())
