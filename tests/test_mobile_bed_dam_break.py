@@ -1,8 +1,8 @@
 """The dam break over a mobile sand bed (verification/mobile_bed_dam_break.py; issue 24 item 3).
 
-CI: the case at 10 mm to its first profile time (0.25 s; about 35 s of CPU), the Ritter reference by
+CI: the case at 10 mm to its first profile time (0.25 s; about 20 s of CPU), the Ritter reference by
 hand, and the experimental comparison kept visible as a strict xfail until Spinewine & Zech's profiles
-are digitised. Nightly: the resolution study (10, 7, 5 mm to 1 s; about half an hour of CPU).
+are digitised. Nightly: the resolution study (10, 7, 5 mm to 0.5 s; about 8 min of CPU).
 """
 
 import numpy as np

@@ -14,7 +14,7 @@ in tests/test_mobile_bed_dam_break.py keeps it visible):
   * H0 = 0.35 m of water above the bed upstream: CHOSEN, the helper's recollection of the test, not
     verified in any source read (the .md); every check below holds for any H0;
   * BED = 0.07 m thick (chosen: the pick-up rate at the Ritter flow's bed shear, about 4 mm/s at the
-    gate, and the 1-2 cm the soil's yield moves the surface in 1 s stay well inside it; a whole multiple
+    gate, and the 3-13 mm the soil's yield moves the surface by 0.5 s stay well inside it; a whole multiple
     of the study's spacings, 10, 7 and 5 mm, as every length of the scene: a lattice that does not fit
     leaves a particle within dx/2 of a wall, where the wall repulsion blows the run up);
   * the sand rests on a no-slip floor (the experiment has a motionless region under the moving layer;
