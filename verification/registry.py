@@ -31,6 +31,7 @@ CASES = {
     "sediment_threshold": "verification.sediment_threshold",  # issue 24 item 3, Shields onset
     "granular_incline": "verification.granular_incline",  # issue 24 item 1, mu(I) Bagnold profile
     "jet_scour": "verification.jet_scour",  # issue 24 item 3, plane jet scour depth against time
+    "mobile_bed_dam_break": "verification.mobile_bed_dam_break",  # issue 24 item 3, Spinewine & Zech set-up
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out
 NIGHTLY_CASES = {
