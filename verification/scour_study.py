@@ -212,6 +212,7 @@ def run_case(soil, q, dx, end_time, length=None, threads=1, sets=(), resume=Fals
         json.loads((dest / f"{name}.json").read_text()) if resume and (dest / f"{name}.json").exists() else {}
     )
     load0 = os.getloadavg()[0]
+    commit = solver_commit()  # the code this segment runs (taken now: the tree may move on while it runs)
     c0, w0 = time.process_time(), time.perf_counter()
     status = "completed"
     try:
@@ -233,7 +234,7 @@ def run_case(soil, q, dx, end_time, length=None, threads=1, sets=(), resume=Fals
         "cpu_s": cpu,
         "load_start": load0,
         "load_end": os.getloadavg()[0],
-        "solver_commit": solver_commit(),
+        "solver_commit": commit,
         "continued": bool(resume),
     }
     earlier = before.get("segments") or (  # a summary written before segments were recorded
