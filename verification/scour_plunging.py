@@ -52,6 +52,7 @@ END = 1.0  # s simulated: the affordable length on this 2-core machine (docs/sco
 COMPARE_TIMES = (0.25, 0.5, 1.0)  # s: where the convergence is read
 CONVERGENCE_Q = 0.11
 CONVERGENCE_TOLERANCE = 0.10  # the issue's "within 10 %"
+SAND_LABEL = "0.5 mm sand (d90 1 mm)"
 
 
 def convergence_cases(end=END):
@@ -91,6 +92,91 @@ def convergence_rows(cases):
     return rows
 
 
+def _runs_section(cases):
+    from verification.scour_study import residual
+
+    lines = [
+        "## Runs",
+        "",
+        "| case | t reached (s) | d_jet at " + " / ".join(f"{t:g}" for t in COMPARE_TIMES) + " s (mm) "
+        "| x of d_jet at the end (m) | d at the end (mm) | steps | particles | CPU (s) | load | body leaks "
+        "| balance residual (particle volumes) | solver |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for c in sorted(cases, key=lambda c: (-c["dx"], c["soil"], c["q"])):
+        ds = " / ".join(
+            f"{1000 * d_jet(c, t):.2f}" if np.isfinite(d_jet(c, t)) else "-" for t in COMPARE_TIMES
+        )
+        lines.append(
+            f"| {c['case']} | {c['t_reached']:.3f} | {ds} | {c['x_nappe'][-1]:.3f} | {1000 * c['d'][-1]:.2f} "
+            f"| {c['steps']} | {c['particles_end']} | {c['cpu_s']:.0f} "
+            f"| {c['load_start']:.1f}-{c['load_end']:.1f} "
+            f"| {c.get('body_leaks')} | {residual(c):.1g} | {c.get('solver_commit', '')} |"
+        )
+    return lines
+
+
+def _convergence_section(conv):
+    lines = [
+        "",
+        f"## Convergence (q = {CONVERGENCE_Q} m²/s; the issue's tolerance "
+        f"{100 * CONVERGENCE_TOLERANCE:.0f} %)",
+        "",
+        "| soil | t (s) | d_jet 5 mm | d_jet 3.5 mm | d_jet 2.5 mm | (5 − 2.5) / 2.5 | (3.5 − 2.5) / 2.5 "
+        "| within 10 % |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in conv:
+        ok = all(abs(r[f"rel_{dx}"]) <= CONVERGENCE_TOLERANCE for dx in (DX, DX_MID))
+        lines.append(
+            f"| {r['soil']} | {r['t']:g} | {1000 * r[DX]:.2f} | {1000 * r[DX_MID]:.2f} "
+            f"| {1000 * r['fine']:.2f} "
+            f"| {100 * r[f'rel_{DX}']:+.1f} % | {100 * r[f'rel_{DX_MID}']:+.1f} % | {'yes' if ok else 'no'} |"
+        )
+    return lines
+
+
+def _sweep_section(cases, pred):
+    """d_jet against q at 5 mm, its exponent, and the formulas' exponents and equilibrium depths."""
+    lines = [
+        "",
+        "## Growth with q (5 mm) and the published formulas",
+        "",
+        f"Formulas: equilibrium depth below the original bed in this set-up (fall {FALL} m, loss-free",
+        f"supercritical tailwater, {SAND_LABEL}; verification/analytic/scour_formulas.py, nothing tuned):",
+        "",
+        "| formula | exponent of q | depth at q = " + " / ".join(f"{q:g}" for q in Q_ALL) + " (m) |",
+        "|---|---|---|",
+    ]
+    for name, r in pred["formulas"].items():
+        depths = " / ".join(f"{v:.3f}" for v in r["below_bed"])
+        lines.append(f"| {name} | {r['q_exponent_in_setup']:.2f} | {depths} |")
+    lines += [
+        "",
+        "SPH: d_jet at each time against q (log-log least squares, ± standard error) and d_jet over each",
+        "formula's equilibrium depth (range over the formulas):",
+        "",
+        "| soil | t (s) | q | d_jet (mm) | exponent of q | d_jet / formula equilibrium |",
+        "|---|---|---|---|---|---|",
+    ]
+    for soil in SOILS:
+        sel = sorted((c for c in cases if c["soil"] == soil and c["dx"] == DX), key=lambda c: c["q"])
+        for t in COMPARE_TIMES:
+            pts = [(c["q"], d_jet(c, t)) for c in sel if np.isfinite(d_jet(c, t))]
+            if len(pts) < 2:
+                continue
+            qs, ds = (np.array(v) for v in zip(*pts))
+            e, se, _ = q_exponent_fit(qs, ds)
+            idx = [Q_ALL.index(round(q, 2)) for q in qs]
+            ratios = np.concatenate([ds / r["below_bed"][idx] for r in pred["formulas"].values()])
+            lines.append(
+                f"| {soil} | {t:g} | {', '.join(f'{q:g}' for q in qs)} | "
+                f"{', '.join(f'{1000 * d:.2f}' for d in ds)} | {e:.2f} ± {se:.2f} | "
+                f"{ratios.min():.2g}-{ratios.max():.2g} |"
+            )
+    return lines
+
+
 def report(out=RESULTS):
     import matplotlib
 
@@ -104,84 +190,20 @@ def report(out=RESULTS):
         print("no runs yet: python -m verification.scour_plunging run-all", file=sys.stderr)
         return 1
     out.mkdir(parents=True, exist_ok=True)
+    conv = convergence_rows(cases)
+    pred = predictions(np.array(Q_ALL), SAND, fall=FALL)
     lines = [
         "# Plunging scour study: results",
         "",
-        "Written by `python -m verification.scour_plunging report` from verification/results/scour_plunging/cases/.",
-        "d_jet: the bed's deepest drop over 0.03 m <= x <= L - 0.10 m (verification/scour_plunging.py);",
-        "d: the same over the whole layer. CPU: the run's CPU seconds (one process, one Numba thread);",
-        "load: the 1-min load average at start and end (the 2 cores were shared).",
+        "Written by `python -m verification.scour_plunging report` from",
+        "verification/results/scour_plunging/cases/. d_jet: the bed's deepest drop over",
+        "0.03 m ≤ x ≤ L − 0.10 m (verification/scour_plunging.py); d: the same over the whole layer. CPU:",
+        "the run's CPU seconds",
+        "(one process, one Numba thread); load: the 1-min load average at its start and end (the 2 cores",
+        "were shared with other jobs).",
         "",
-        "## Runs",
-        "",
-        "| case | t reached (s) | d_jet 0.25 / 0.5 / 1 s (mm) | x of d_jet at the end (m) | d at the end (mm) "
-        "| suspended... | steps | particles | CPU (s) | load | leaks | balance residual (particle volumes) | solver |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    from verification.scour_study import residual
-
-    for c in sorted(cases, key=lambda c: (c["dx"], c["soil"], c["q"])):
-        ds = " / ".join(
-            f"{1000 * d_jet(c, t):.2f}" if np.isfinite(d_jet(c, t)) else "-" for t in COMPARE_TIMES
-        )
-        lines.append(
-            f"| {c['case']} | {c['t_reached']:.3f} | {ds} | {c['x_nappe'][-1]:.3f} | {1000 * c['d'][-1]:.2f} "
-            f"| | {c['steps']} | {c['particles_end']} | {c['cpu_s']:.0f} | {c['load_start']:.1f}-{c['load_end']:.1f} "
-            f"| {c.get('body_leaks')} | {residual(c):.1g} | {c.get('solver_commit', '')} |"
-        )
-    conv = convergence_rows(cases)
-    lines += [
-        "",
-        f"## Convergence (q = {CONVERGENCE_Q} m^2/s; the issue's tolerance {100 * CONVERGENCE_TOLERANCE:.0f} %)",
-        "",
-        "| soil | t (s) | d_jet 5 mm | d_jet 3.5 mm | d_jet 2.5 mm | (5 - 2.5) / 2.5 | (3.5 - 2.5) / 2.5 | within 10 % |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for r in conv:
-        ok = all(abs(r[f"rel_{dx}"]) <= CONVERGENCE_TOLERANCE for dx in (DX, DX_MID))
-        lines.append(
-            f"| {r['soil']} | {r['t']:g} | {1000 * r[DX]:.2f} | {1000 * r[DX_MID]:.2f} | {1000 * r['fine']:.2f} "
-            f"| {100 * r[f'rel_{DX}']:+.1f} % | {100 * r[f'rel_{DX_MID}']:+.1f} % | {'yes' if ok else 'no'} |"
-        )
-    # growth with q at 5 mm
-    lines += [
-        "",
-        "## Growth with q (5 mm)",
-        "",
-        "| soil | t (s) | q | d_jet (mm) | exponent of q |",
-        "|---|---|---|---|---|",
-    ]
-    sweep = {}
-    for soil in SOILS:
-        sel = sorted((c for c in cases if c["soil"] == soil and c["dx"] == DX), key=lambda c: c["q"])
-        for t in COMPARE_TIMES:
-            pts = [(c["q"], d_jet(c, t)) for c in sel if np.isfinite(d_jet(c, t))]
-            if len(pts) < 2:
-                continue
-            qs, ds = zip(*pts)
-            e, se, _ = q_exponent_fit(qs, ds)
-            sweep[(soil, t)] = (np.array(qs), np.array(ds))
-            lines.append(
-                f"| {soil} | {t:g} | {', '.join(f'{q:g}' for q in qs)} | {', '.join(f'{1000 * d:.2f}' for d in ds)} "
-                f"| {e:.2f} ± {se:.2f} |"
-            )
-    # the formulas
-    pred = predictions(np.array(Q_ALL), SAND, fall=FALL)
-    lines += [
-        "",
-        f"## Against the published formulas (equilibrium depth below the original bed; fall {FALL} m, {SAND.label})",
-        "",
-        "| formula | q exponent in this set-up | depth at q = "
-        + " / ".join(f"{q:g}" for q in Q_ALL)
-        + " (m) |",
-        "|---|---|---|",
-    ]
-    for name, r in pred["formulas"].items():
-        lines.append(
-            f"| {name} | {r['q_exponent_in_setup']:.2f} | "
-            + " / ".join(f"{v:.3f}" for v in r["below_bed"])
-            + " |"
-        )
+    lines += _runs_section(cases) + _convergence_section(conv) + _sweep_section(cases, pred)
     (out / "scour_plunging.md").write_text("\n".join(lines) + "\n")
     with open(out / "convergence.csv", "w", newline="") as fh:
         w = csv.writer(fh)
@@ -189,6 +211,7 @@ def report(out=RESULTS):
         for r in conv:
             w.writerow([r["soil"], r["t"], f"{r[DX]:.6g}", f"{r[DX_MID]:.6g}", f"{r['fine']:.6g}"])
     _plot(plt, cases, out / "depth_vs_time.png")
+    _plot_profiles(plt, cases, out / "hole_profiles.png")
     print(f"report in {out}/scour_plunging.md")
     return 0
 
@@ -205,14 +228,38 @@ def _plot(plt, cases, path):
         ax.legend(fontsize=7)
     ax = axs[2]
     for soil, ls in zip(SOILS, ("--", "-")):
-        for c in sorted(
-            (c for c in cases if c["soil"] == soil and abs(c["q"] - CONVERGENCE_Q) < 1e-9),
-            key=lambda c: -c["dx"],
-        ):
+        at_q = (c for c in cases if c["soil"] == soil and abs(c["q"] - CONVERGENCE_Q) < 1e-9)
+        for c in sorted(at_q, key=lambda c: -c["dx"]):
             ax.plot(c["t"], 1000 * c["d_nappe"], ls, label=f"{soil}, {1000 * c['dx']:g} mm")
     ax.set_title(f"q = {CONVERGENCE_Q}: d_jet(t) at 5, 3.5, 2.5 mm")
     ax.set_xlabel("t (s)")
     ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _plot_profiles(plt, cases, path):
+    """The bed surface change z_s(x, t) - z_s(x, 0) at q = CONVERGENCE_Q, each spacing, at COMPARE_TIMES."""
+    from verification.scour_zones import read_profiles
+
+    fig, axs = plt.subplots(1, 2, figsize=(13, 4), sharey=True)
+    for ax, soil in zip(axs, SOILS):
+        at_q = (c for c in cases if c["soil"] == soil and abs(c["q"] - CONVERGENCE_Q) < 1e-9)
+        for c, color in zip(sorted(at_q, key=lambda c: -c["dx"]), ("C0", "C1", "C2")):
+            kept = RESULTS / "cases" / f"{c['case']}_profiles.csv"
+            if not kept.exists():
+                continue
+            x, t, z = read_profiles(kept)
+            for tt, ls in zip(COMPARE_TIMES, (":", "--", "-")):
+                if t[-1] >= tt - 1e-9:
+                    k = int(np.argmin(np.abs(t - tt)))
+                    ax.plot(x, 1000 * (z[:, k] - z[:, 0]), ls, color=color,
+                            label=f"{1000 * c['dx']:g} mm, {tt:g} s")  # fmt: skip
+        ax.set_title(f"{soil}, q = {CONVERGENCE_Q}: bed surface change")
+        ax.set_xlabel("x (m)")
+        ax.legend(fontsize=7, ncol=3)
+    axs[0].set_ylabel("z_s(t) − z_s(0) (mm)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
