@@ -170,3 +170,18 @@ def wall_shear_accelerations(soil, water, x, mass, rho, fixed, free, shear, weig
                 w = float(cubic_spline(np.linalg.norm(x[a] - x[b]), h, dim))
                 acc[a] -= area * shear[b] * w / weight[b] / mass[a]
     return acc
+
+
+def release_pore_water(free, fraction, rho, rho_half, tait_b, rho0, exponent=7.0):
+    """Pore water outside the bed becomes free water (solver/physics/pore_water_release.py): where
+    fraction < 1 and free, fraction -> 1 and the densities are divided by the old fraction. Returns the
+    new (fraction, rho, rho_half) and the Tait pressures before and after, each with its own reference
+    fraction * rho0 (seed eq. 9)."""
+    fraction, rho, rho_half = (np.array(a, float) for a in (fraction, rho, rho_half))
+    p_before = tait_b * ((rho / (fraction * rho0)) ** exponent - 1.0)
+    move = (fraction < 1.0) & (np.asarray(free) != 0)
+    rho[move] = rho[move] / fraction[move]
+    rho_half[move] = rho_half[move] / fraction[move]
+    fraction[move] = 1.0
+    p_after = tait_b * ((rho / (fraction * rho0)) ** exponent - 1.0)
+    return fraction, rho, rho_half, p_before, p_after

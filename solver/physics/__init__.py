@@ -20,6 +20,7 @@ from .hydrostatic_image_pressure import HydrostaticImagePressure
 from .inlet import Inlets
 from .midpoint_continuity import MidpointContinuity, MidpointStart
 from .outlet import OutletBuffers, Outlets
+from .pore_water_release import PoreWaterRelease
 from .seepage import PorePressureAtSoil, SeepageOnSoil, SeepageOnWater
 from .seepage_pore_diffusion import PoreDensityDiffusion, PoreDensityGradient
 from .shields_pickup import ShieldsPickup
@@ -44,6 +45,7 @@ TERMS = (
     SoilStressState,
     BedSurface,  # erosion: after the stress it leaves alone, before the pick-up that reads it
     FreeWater,  # water outside the bed, for the pick-up's wall shear and the drag
+    PoreWaterRelease,  # pore water outside the bed becomes free water (after the flags it reads)
     ShieldsPickup,  # zeroes the stress of what it suspends, before anything reads the stress
     ArtificialStress,
     EquilibriumSoilImages,
