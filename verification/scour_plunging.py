@@ -212,6 +212,7 @@ def report(out=RESULTS):
             w.writerow([r["soil"], r["t"], f"{r[DX]:.6g}", f"{r[DX_MID]:.6g}", f"{r['fine']:.6g}"])
     _plot(plt, cases, out / "depth_vs_time.png")
     _plot_profiles(plt, cases, out / "hole_profiles.png")
+    _plot_snapshots(plt, out / "snapshots.png")
     print(f"report in {out}/scour_plunging.md")
     return 0
 
@@ -260,6 +261,54 @@ def _plot_profiles(plt, cases, path):
         ax.set_xlabel("x (m)")
         ax.legend(fontsize=7, ncol=3)
     axs[0].set_ylabel("z_s(t) − z_s(0) (mm)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _plot_snapshots(plt, path, times=COMPARE_TIMES):
+    """Particles under the jet at `times` for q = CONVERGENCE_Q at each spacing whose HDF5 series is on
+    disk (runs/scour_study/): water by speed, bed soil brown, picked-up soil red."""
+    from solver.output.hdf5_writer import read_series
+    from verification.scour_study import RUNS, case_name
+
+    rows = []
+    for soil in SOILS:
+        for dx in SPACINGS:
+            h5 = RUNS / case_name(soil, CONVERGENCE_Q, dx, setup="plunging") / "particles.h5"
+            if h5.exists():
+                rows.append((soil, dx, {round(t, 6): f for t, f in read_series(h5)}))
+    if not rows:
+        return
+    fig, axes = plt.subplots(
+        len(rows), len(times), figsize=(4.2 * len(times), 1.9 * len(rows)), squeeze=False
+    )
+    for i, (soil, dx, snaps) in enumerate(rows):
+        for j, t in enumerate(times):
+            ax = axes[i, j]
+            f = snaps.get(round(t, 6))
+            if f is None:
+                ax.set_axis_off()
+                continue
+            x, mat, sus = f["position"], f["material"], f.get("suspended")
+            speed = np.linalg.norm(f["velocity"], axis=1)
+            water = mat == 0
+            bed = (mat == 1) & (sus == 0 if sus is not None else True)
+            size = 2.0 * (dx / DX) ** 2
+            ax.scatter(x[water, 0], x[water, 1], s=size, c=speed[water], cmap="Blues", vmin=0, vmax=3,
+                       linewidths=0)  # fmt: skip
+            ax.scatter(x[bed, 0], x[bed, 1], s=size, c="#8c5a2b", linewidths=0)
+            if sus is not None:
+                up = (mat == 1) & (sus == 1)
+                ax.scatter(x[up, 0], x[up, 1], s=2 * size, c="red", linewidths=0)
+            ax.set_xlim(0.0, 0.45)
+            ax.set_ylim(0.03, 0.2)
+            ax.set_aspect("equal")
+            ax.set_title(f"{soil}, {1000 * dx:g} mm, t = {t:g} s", fontsize=8)
+            ax.tick_params(labelsize=6)
+    fig.suptitle(
+        f"q = {CONVERGENCE_Q} m²/s: water by speed (0-3 m/s), bed brown, picked-up sand red", fontsize=9
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
