@@ -178,6 +178,17 @@ def unit(vector) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+def inlet_width(inlet, dx: float, g: float) -> float:
+    """The width of an inlet's section as the inlet builds it (solver/physics/inlet.py): `width`, or
+    the critical depth (q^2/g)^(1/3) of a free overfall (Chow 1959, eq. 3-9), either in whole spacings,
+    at least one (so a tiny q gives one slow layer, never a section of zero width)."""
+    if inlet.width is not None:
+        return float(inlet.width)
+    with np.errstate(over="ignore"):
+        layers = round(min((inlet.discharge**2 / g) ** (1.0 / 3.0) / dx, 1e18))
+    return max(1, layers) * dx
+
+
 def _inlet_extent(s, inlet, lo, hi, eps):
     """(key, reason) if the section, its buffer or its prefill does not fit the domain, or the
     inflow is faster than the water's sound speed; else None. These bound the particles an inlet
@@ -187,12 +198,8 @@ def _inlet_extent(s, inlet, lo, hi, eps):
     a = np.array([-d[1], d[0]]) if inlet.across is None else unit(inlet.across)
     cos = abs(a[0] * d[1] - a[1] * d[0])  # d . n, n the section's unit normal
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-        if inlet.width is None:
-            g = float(np.hypot(*s.scene.gravity))
-            width = max(1.0, round(min((inlet.discharge**2 / g) ** (1.0 / 3.0) / dx, 1e18))) * dx
-            key = "discharge"
-        else:
-            width, key = inlet.width, "width"
+        width = inlet_width(inlet, dx, float(np.hypot(*s.scene.gravity)))
+        key = "discharge" if inlet.width is None else "width"
         o = np.asarray(inlet.origin, float)
         ends = np.array([o, o + width * a])
         if not np.all(np.isfinite(ends)) or np.any(ends < lo - eps) or np.any(ends > hi + eps):

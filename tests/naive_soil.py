@@ -71,9 +71,11 @@ def return_map(p, s6, model, K, G, phi_deg, c, psi_deg=0.0, mu_r=0.0):
     return p_new, to_voigt(sig_new + p_new * np.eye(3))
 
 
-def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55, w_dx=1.0):
+def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55, w_dx=1.0,
+               suspended=None, suspended_av=(0.0, 0.0)):  # fmt: skip
     """All-pairs continuity (6), momentum (20) with AV (19) and artificial stress, and the
-    Hooke-Jaumann rate (13)-(15), for every particle (one material)."""
+    Hooke-Jaumann rate (13)-(15), for every particle (one material). suspended: a pair with a
+    suspended particle takes the AV constants suspended_av = (alpha, beta)."""
     n, dim = x.shape
     drho = np.zeros(n)
     acc = np.zeros((n, dim))
@@ -91,8 +93,11 @@ def soil_rates(x, v, rho, p, s, mass, c, G, h, alpha, beta, art=None, art_n=2.55
             T = sig_i / rho[i] ** 2 + sig_j / rho[j] ** 2
             vr = vij @ xij
             if vr < 0:
+                a, b = alpha, beta
+                if suspended is not None and (suspended[i] or suspended[j]):
+                    a, b = suspended_av
                 phi = h * vr / (xij @ xij + 0.01 * h * h)
-                T = T - (-alpha * c * phi + beta * phi**2) / (0.5 * (rho[i] + rho[j])) * np.eye(dim)
+                T = T - (-a * c * phi + b * phi**2) / (0.5 * (rho[i] + rho[j])) * np.eye(dim)
             if art is not None:
                 f = cubic_spline(np.linalg.norm(xij), h, dim) / w_dx
                 T = T + f**art_n * (to_matrix(art[i]) + to_matrix(art[j]))[:dim, :dim]

@@ -523,9 +523,10 @@ def test_free_water_and_wall_shear_match_twins(rng, dim):
 
 @pytest.mark.parametrize("one_soil", [None, 1])
 def test_free_water_pairs_carry_no_drag(rng, one_soil):
-    """The seepage kernels with the free-water flags differ from those without by exactly the drag of the
-    free pairs: V_a V_b C W_ab (v_a - v_b) on soil b of an eroding material, not suspended; buoyancy and
-    storage unchanged (the seed form here: drag only; one_soil: the loop-invariant path)."""
+    """The seepage kernels with the free-water flags differ from those without by exactly the drag
+    V_a V_b C W_ab (v_a - v_b) of the pairs that carry none: free water with the bed of an eroding
+    material, and pore water (not free) with suspended soil; buoyancy and storage unchanged (the seed
+    form here: drag only; one_soil: the loop-invariant path)."""
     from naive import cubic_spline as w_kernel
 
     from solver.physics.seepage import seepage_on_soil, seepage_on_water
@@ -599,10 +600,10 @@ def test_free_water_pairs_carry_no_drag(rng, one_soil):
     diff = rates(True) - rates(False)
     expected = np.zeros((n, 2))
     for a in s["water"]:
-        if not free[a]:
-            continue
         for b in s["soil"]:
-            if s["suspended"][b] or not erodes[s["material"][b]]:
+            if not erodes[s["material"][b]]:
+                continue
+            if bool(free[a]) == bool(s["suspended"][b]):  # free water and suspended soil: the drag stays
                 continue
             w = w_kernel(np.linalg.norm(s["x"][a] - s["x"][b]), s["h"], 2)
             force_on_b = vol[a] * vol[b] * drag[s["material"][b]] * w * (s["v"][a] - s["v"][b])

@@ -37,6 +37,8 @@ COARSE = {
     "column_collapse_2d": 0.005,
     "scour_dry": 0.01,  # 2 dx of the seed: a 10 mm layer of particles still fills the 0.095 m soil
     "scour_saturated": 0.01,
+    "scour_plunging_dry": 0.01,  # as the seed's scour scenes: 0.6 x 0.095 m of soil at 2 dx of the seed
+    "scour_plunging_saturated": 0.01,
 }
 END = 0.002
 SCENES = shipped_scenes()

@@ -112,6 +112,23 @@ def test_inlet_geometry_from_q_alone():
     assert z.mass == pytest.approx(1000.0 * 0.005**2)
 
 
+def test_a_tiny_discharge_is_one_slow_layer_everywhere():
+    """The fuzzer's `inlets.0.discharge = tiny` (1e-300): the critical depth underflows to 0, and the wall
+    backstop's head divided q by it (ZeroDivisionError). Every user of the section's width now takes the
+    inlet's own rule (scene_open.inlet_width): at least one spacing."""
+    from solver.physics.wall_repulsion import largest_height
+    from solver.plan import build_plan
+
+    raw = tomllib.loads(CHANNEL)
+    del raw["inlets"][0]["width"]
+    raw["inlets"][0]["discharge"] = 1e-300
+    scene = parse_scene(raw, "<channel>")
+    z = Inlets.build(scene, build_material_table(scene)).zones[0]
+    assert z.m == 1 and z.width == pytest.approx(0.005) and z.speed == pytest.approx(2e-298)
+    assert np.isfinite(largest_height(scene))
+    build_plan(scene)
+
+
 @pytest.fixture(scope="module")
 def channel_run():
     """Step the channel to 0.3 s, recording the inserted volume after every step."""

@@ -104,3 +104,27 @@ def test_the_nappe_zone_leaves_out_the_end_wall_trough(tmp_path):
     copy.write_text("t_s,depth_m\n0,0\n1,0.0003\n2,0.0051\n")
     with pytest.raises(ValueError, match="another run"):
         sz.add_zone_columns(copy, prof)
+
+
+def test_a_layer_above_0_1_m_is_matched_to_its_profiles_rounding(tmp_path):
+    """Profiles keep 6 significant digits: z = 0.105 m is known to 1 um, not 0.1 um. The plunging
+    layer's run (0.105 m deep) differed from its own profiles by 0.39 um and was refused as another
+    run; a real difference (10 um) still is."""
+    from verification import scour_zones as sz
+
+    x = (np.arange(126) + 0.5) * 0.005
+    t = np.array([0.0, 1.0])
+    z = np.full((126, 2), 0.105)
+    z[40, 1] = 0.105 - 0.02923386  # a hole whose rounded profile reads 0.0757661 (1e-7 m steps)
+    prof, copy = tmp_path / "p.csv", tmp_path / "c_scour.csv"
+    _profiles_csv(prof, x, t, z)
+    copy.write_text("t_s,depth_m\n0,0\n1,0.02923386\n")
+    sz.add_zone_columns(copy, prof)
+    z[:, 0] = 0.1051234  # rounded to 0.105123: 0.4 um off, within the rounding of z > 0.1 m
+    z[40, 1] = 0.1051234 - 0.02923386
+    _profiles_csv(prof, x, t, z)
+    copy.write_text("t_s,depth_m\n0,0\n1,0.02923386\n")
+    sz.add_zone_columns(copy, prof)
+    copy.write_text("t_s,depth_m\n0,0\n1,0.02924386\n")
+    with pytest.raises(ValueError, match="another run"):
+        sz.add_zone_columns(copy, prof)

@@ -147,6 +147,9 @@ def test_jaumann_update_is_objective_under_rigid_rotation():
     assert j2root(s) == pytest.approx(j2root(s0), rel=1e-9)
 
 
+SUSPENDED_AV = (0.01, 0.05)  # a water-like (alpha, beta) for the pairs with suspended soil
+
+
 def run_soil_rates(targets, start, index, x, v, rho, p, s, mass, *rest):
     """The two kernels of the SoilRates term: the per-row table, then the pair pass, with the
     lists' unsigned views as the term passes them (NeighbourList.unsigned)."""
@@ -180,19 +183,22 @@ def _lists(x, h):
 
 
 @pytest.mark.parametrize(
-    "with_av,with_art,dim,mixed",
+    "with_av,with_art,dim,mixed,with_suspended",
     [
-        (False, False, 2, True),
-        (True, False, 2, True),
-        (True, True, 2, True),
-        (True, True, 2, False),
-        (True, True, 3, True),
-        (True, True, 3, False),
+        (False, False, 2, True, False),
+        (True, False, 2, True, False),
+        (True, True, 2, True, False),
+        (True, True, 2, False, False),
+        (True, True, 3, True, False),
+        (True, True, 3, False, False),
+        (True, False, 2, False, True),
+        (True, False, 3, True, True),
     ],
 )
-def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
+def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed, with_suspended):
     """mixed False (None to the kernel): the one-soil-material path (AV constants of the target for
-    every pair)."""
+    every pair). with_suspended: a third of the particles are suspended (erosion), their pairs take the
+    water's AV constants."""
     dx, h = 0.01, 0.013
     x = disordered_lattice(8 if dim == 2 else 5, dim, dx, rng)
     n = len(x)
@@ -211,6 +217,7 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
     mat = np.zeros(n, dtype=np.int32)
     c = np.array([20.0])
     av = np.array([1.0]) if with_av else None
+    suspended = (rng.random(n) < 1 / 3).astype(np.uint8) if with_suspended else None
     nl = _lists(x, h)
     norm = cubic_spline_normalisation(dim, h)
     w_dx = cubic_spline_w(dx, h, norm)
@@ -237,6 +244,9 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
         av,
         True if dim == 3 else None,
         True if mixed else None,
+        None,  # shear_rate (mu(I) soils only)
+        suspended,
+        *SUSPENDED_AV,
     )
     if with_art:  # the artificial stress force is a pass (term) of its own
         flags = np.zeros(n, np.uint8)
@@ -248,8 +258,9 @@ def test_soil_rates_match_twin(rng, with_av, with_art, dim, mixed):
             True if dim == 3 else None,
         )  # fmt: skip
     d2, a2, s2 = nv.soil_rates(
-        x, v, rho, p, s, mass, 20.0, G, h, 1.0 if with_av else 0.0, 1.0 if with_av else 0.0, art, 2.55, w_dx
-    )
+        x, v, rho, p, s, mass, 20.0, G, h, 1.0 if with_av else 0.0, 1.0 if with_av else 0.0, art, 2.55, w_dx,
+        suspended, SUSPENDED_AV,
+    )  # fmt: skip
     np.testing.assert_allclose(drho, d2, rtol=1e-9, atol=1e-9 * np.abs(d2).max())
     np.testing.assert_allclose(acc, a2, rtol=1e-9, atol=1e-9 * np.abs(a2).max())
     np.testing.assert_allclose(ds, s2, rtol=1e-9, atol=1e-9 * np.abs(s2).max())

@@ -50,6 +50,7 @@ import subprocess
 import sys
 import time
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,31 @@ SCENES = ROOT / "solver" / "scenes"
 RESULTS = Path(__file__).with_name("results") / "scour"
 RUNS = ROOT / "runs" / "scour_study"
 SOILS = ("dry", "saturated")
+
+
+@dataclass(frozen=True)
+class Setup:
+    """A scour set-up the study runs: its shipped scenes (one per soil), the layer length they have,
+    where its case summaries go and the case-name prefix that keeps its runs apart."""
+
+    name: str
+    scene: str  # file name pattern in SCENES, {soil} filled in
+    length: float  # the shipped scenes' soil layer length (m)
+    results: Path
+    prefix: str
+
+    def scene_path(self, soil):
+        return SCENES / self.scene.format(soil=soil)
+
+
+SETUPS = {
+    # the seed's set-up (docs/scour_setup.md): the 0.01 m fall, drowned nappe, 0.25 m layer
+    "seed": Setup("seed", "scour_{soil}.toml", 0.25, RESULTS, ""),
+    # issue 24 item 4: the nappe plunges onto an eroding bed (docs/scour_plunging.md)
+    "plunging": Setup(
+        "plunging", "scour_plunging_{soil}.toml", 0.63, RESULTS.with_name("scour_plunging"), "plunging_"
+    ),
+}
 Q_STUDY = (
     0.06,
     0.08,
@@ -108,21 +134,25 @@ def variant_tag(sets=(), ranks=1):
     return tail + (f"_np{ranks}" if ranks > 1 else "")
 
 
-def case_name(soil, q, dx, length=0.25, sets=(), ranks=1):
-    tail = "" if abs(length - 0.25) < 1e-12 else f"_L{length:g}"
-    return f"{soil}_q{q:.2f}_dx{dx * 1000:g}mm{tail}{variant_tag(sets, ranks)}"
+def case_name(soil, q, dx, length=None, sets=(), ranks=1, setup="seed"):
+    st = SETUPS[setup]
+    length = st.length if length is None else length
+    tail = "" if abs(length - st.length) < 1e-12 else f"_L{length:g}"
+    return f"{st.prefix}{soil}_q{q:.2f}_dx{dx * 1000:g}mm{tail}{variant_tag(sets, ranks)}"
 
 
-def scene_raw(soil, q, dx, end_time, length=0.25, sets=(), ranks=1):
-    """The shipped scene with q, dx and end time changed (length: the soil layer's, docs/scour_setup.md
-    sec. 2 recommends 0.60 m for long runs; the end wall and outlet move with it), then the variant's
-    `sets` ("dotted.key=value", as `scoursph run --set`)."""
+def scene_raw(soil, q, dx, end_time, length=None, sets=(), ranks=1, setup="seed"):
+    """The shipped scene of the set-up with q, dx and end time changed (length: the soil layer's,
+    docs/scour_setup.md sec. 2 recommends 0.60 m for long runs of the seed's set-up; the end wall and
+    outlet move with it), then the variant's `sets` ("dotted.key=value", as `scoursph run --set`)."""
     from solver.scene import apply_overrides
 
-    raw = tomllib.loads((SCENES / f"scour_{soil}.toml").read_text())
+    st = SETUPS[setup]
+    length = st.length if length is None else length
+    raw = tomllib.loads(st.scene_path(soil).read_text())
     raw["scene"]["spacing"] = float(dx)
     raw["scene"]["end_time"] = float(end_time)
-    raw["scene"]["name"] = case_name(soil, q, dx, length, sets, ranks)
+    raw["scene"]["name"] = case_name(soil, q, dx, length, sets, ranks, setup)
     raw["inlets"][0]["discharge"] = float(q)
     times = [t for t in SEED_TIMES if t <= end_time]
     k = 1
@@ -135,15 +165,15 @@ def scene_raw(soil, q, dx, end_time, length=0.25, sets=(), ranks=1):
     raw["output"]["times"] = [0.0] + times
     raw["output"]["vtk"] = False
     raw["output"]["render"] = True
-    if abs(length - 0.25) > 1e-12:
-        shift = length - 0.25
+    if abs(length - st.length) > 1e-12:
+        shift = length - st.length
         raw["domain"]["max"][0] += shift
         raw["blocks"][0]["max"][0] = length
         end = next(b for b in raw["bodies"] if b["name"] == "end wall")
         end["vertices"] = [[x + shift, z] for x, z in end["vertices"]]
         raw["outlets"][0]["min"][0] += shift
         raw["outlets"][0]["max"][0] += shift
-    return apply_overrides(raw, sets, SCENES / f"scour_{soil}.toml")
+    return apply_overrides(raw, sets, st.scene_path(soil))
 
 
 def solver_commit():
@@ -158,7 +188,7 @@ def solver_commit():
         return "unknown"
 
 
-def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=False):
+def run_case(soil, q, dx, end_time, length=None, threads=1, sets=(), resume=False, setup="seed"):
     """Run one case in this process (on every rank under mpirun); write its summary and scour.csv
     copy into RESULTS/cases. `resume`: continue the case's run directory from its newest checkpoint
     to end_time; its summary's CPU and wall time become the sums over the segments."""
@@ -172,16 +202,17 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=Fals
 
     comm = communicator()
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    name = case_name(soil, q, dx, length, sets, comm.size)
-    scene = parse_scene(
-        scene_raw(soil, q, dx, end_time, length, sets, comm.size), SCENES / f"scour_{soil}.toml"
-    )
+    st = SETUPS[setup]
+    length = st.length if length is None else length
+    name = case_name(soil, q, dx, length, sets, comm.size, setup)
+    scene = parse_scene(scene_raw(soil, q, dx, end_time, length, sets, comm.size, setup), st.scene_path(soil))
     out = RUNS / name
-    dest = RESULTS / "cases"
+    dest = st.results / "cases"
     before = (
         json.loads((dest / f"{name}.json").read_text()) if resume and (dest / f"{name}.json").exists() else {}
     )
     load0 = os.getloadavg()[0]
+    commit = solver_commit()  # the code this segment runs (taken now: the tree may move on while it runs)
     c0, w0 = time.process_time(), time.perf_counter()
     status = "completed"
     try:
@@ -203,7 +234,7 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=Fals
         "cpu_s": cpu,
         "load_start": load0,
         "load_end": os.getloadavg()[0],
-        "solver_commit": solver_commit(),
+        "solver_commit": commit,
         "continued": bool(resume),
     }
     earlier = before.get("segments") or (  # a summary written before segments were recorded
@@ -214,6 +245,7 @@ def run_case(soil, q, dx, end_time, length=0.25, threads=1, sets=(), resume=Fals
     segments = earlier + [segment]
     summary = {
         "case": name,
+        "setup": setup,
         "soil": soil,
         "q": q,
         "dx": dx,
@@ -936,14 +968,16 @@ def study_cases(end_time, qs=Q_STUDY, fine=FINE):
     return cases
 
 
-def run_all(cases, jobs=1, nice=10):
-    """Run the cases not yet in RESULTS/cases (or shorter there than asked), `jobs` processes at a
-    time, each a separate `nice`d process with one Numba thread. A case is (soil, q, dx, end,
-    length) or (soil, q, dx, end, length, sets)."""
+def run_all(cases, jobs=1, nice=10, setup="seed"):
+    """Run the cases not yet in the set-up's cases/ (or shorter there than asked), `jobs` processes at
+    a time, each a separate `nice`d process with one Numba thread. A case is (soil, q, dx, end,
+    length) or (soil, q, dx, end, length, sets); length None: the set-up's."""
+    st = SETUPS[setup]
     todo = []
     for soil, q, dx, end, length, *rest in cases:
         sets = tuple(rest[0]) if rest else ()
-        done = RESULTS / "cases" / f"{case_name(soil, q, dx, length, sets)}.json"
+        length = st.length if length is None else length
+        done = st.results / "cases" / f"{case_name(soil, q, dx, length, sets, setup=setup)}.json"
         if done.exists() and json.loads(done.read_text())["t_reached"] >= end - 1e-9:
             continue
         todo.append((soil, q, dx, end, length, sets))
@@ -953,7 +987,7 @@ def run_all(cases, jobs=1, nice=10):
             running = [p for p in running if p.poll() is None]
             time.sleep(2)
         cmd = ["nice", "-n", str(nice), sys.executable, "-m", "verification.scour_study", "run", soil, str(q),
-               "--dx", str(dx), "--end", str(end), "--length", str(length)]  # fmt: skip
+               "--dx", str(dx), "--end", str(end), "--length", str(length), "--setup", setup]  # fmt: skip
         cmd += [f"--set={item}" for item in sets]
         running.append(subprocess.Popen(cmd, cwd=ROOT))
     for p in running:
@@ -969,7 +1003,9 @@ def main(argv=None):
     r.add_argument("q", type=float)
     r.add_argument("--dx", type=float, default=DX)
     r.add_argument("--end", type=float, default=END_TIME)
-    r.add_argument("--length", type=float, default=0.25, help="soil layer length (m)")
+    r.add_argument("--length", type=float, default=None, help="soil layer length (m; default: the set-up's)")
+    r.add_argument("--setup", choices=tuple(SETUPS), default="seed",
+                   help="seed: the seed's drowned overflow; plunging: issue 24's plunging nappe")  # fmt: skip
     r.add_argument("--threads", type=int, default=1)
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="a scene override (as scoursph run --set), named in the case: a variant")  # fmt: skip
@@ -1003,7 +1039,15 @@ def main(argv=None):
 
         try:
             s = run_case(
-                args.soil, args.q, args.dx, args.end, args.length, args.threads, args.set, args.resume
+                args.soil,
+                args.q,
+                args.dx,
+                args.end,
+                args.length,
+                args.threads,
+                args.set,
+                args.resume,
+                args.setup,
             )
         except SceneError as exc:  # a bad --set: exit 2 naming the file and key
             print(f"scour_study: {exc}", file=sys.stderr)

@@ -109,10 +109,12 @@ def whole_layer_depth(z):
 def add_zone_columns(scour_csv, profiles_csv, wall_zone=WALL_ZONE, tol=2e-7):
     """Rewrite a study copy of scour.csv with the zone columns from the run's profiles; refuse
     (ValueError) profiles whose whole-layer d differs from the copy's depth_m at any time by more
-    than `tol` m (the profiles keep 6 significant digits of z ~ 0.1 m, 0.05 um each, so a drop is
-    known to 0.1 um) or whose times differ."""
+    than `tol` m or than the profiles' own rounding, whichever is larger (they keep 6 significant
+    digits of z: 0.1 um steps below z = 0.1 m, 1 um above, and a drop is the difference of two such
+    values) or whose times differ."""
     rows = list(csv.DictReader(open(scour_csv)))
     x, t, z = read_profiles(profiles_csv)
+    tol = max(tol, 2.0 * 10.0 ** (np.floor(np.log10(np.abs(z).max())) - 5))  # two rounded values
     ts = np.array([float(r["t_s"]) for r in rows])
     if len(ts) != len(t) or np.abs(ts - t).max() > 1e-6 * max(1.0, ts.max()):
         raise ValueError(f"{profiles_csv}: output times differ from {scour_csv}")

@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from ..particles import FieldSpec
-from ..scene_open import unit
+from ..scene_open import inlet_width, unit
 from ..term import Equation, Stage, Term
 
 ID_STRIDE = 2**40
@@ -69,14 +69,9 @@ class InletZone:
         self.cos = float(self.n @ self.d)
         self.q = float(spec.discharge)
         g = float(np.linalg.norm(scene.scene.gravity))
-        if spec.width is None:
-            self.critical_depth = (self.q**2 / g) ** (1.0 / 3.0)  # Chow (1959), eq. 3-9
-            self.m = max(1, round(self.critical_depth / dx))
-            self.width = self.m * dx
-        else:
-            self.critical_depth = None
-            self.width = float(spec.width)
-            self.m = max(1, round(self.width / dx))
+        self.critical_depth = (self.q**2 / g) ** (1.0 / 3.0) if spec.width is None else None  # Chow (1959)
+        self.width = inlet_width(spec, dx, g)
+        self.m = max(1, round(self.width / dx))
         self.speed = float(spec.speed) if spec.speed is not None else self.q / (self.cos * self.width)
         self.dx = dx
         self.ds = dx / self.cos  # layer spacing along d

@@ -176,6 +176,19 @@ C = n^2 rho_w g / k (= n^2 mu / k_intrinsic) keeps its value (as Morikawa & Asai
 
 
 @kernel
+def no_drag(free_a, suspended_b, erodes_b):
+    """True when the water particle a and the soil particle b of an eroding soil exchange no
+    seepage drag: Darcy's drag is between pore water and the bed it fills. Free water over the bed
+    feels the bed's wall shear instead (bed_shear.py), and soil the flow has picked up (suspended)
+    has left the bed: the free water around it drags it, the bed's pore water does not."""
+    if erodes_b == 0:
+        return False
+    if suspended_b != 0:
+        return free_a == 0
+    return free_a != 0
+
+
+@kernel
 def row_chunks(start, n_chunks):
     """Row bounds of n_chunks contiguous chunks of a list's rows with about equal work (pairs + rows):
     the pair loops run one chunk per thread. An even split of the rows is not even in work: water
@@ -412,7 +425,7 @@ def seepage_on_water(targets, start, index, x, v, rho, mass, vol, material, drag
                 vf = vol_b * cubic_spline_dwdr(r, h, norm) / r  # unused (and not computed) in the seed form
                 free = False
                 if free_water is not None:
-                    free = free_water[a] != 0 and suspended[b] == 0 and erodes[mb] != 0
+                    free = no_drag(free_water[a], suspended[b], erodes[mb])
                 if one_soil is None and not free:
                     kw = vw * drag[mb]  # K_ab / V_a
                     f0 += kw * u0
@@ -548,9 +561,6 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag,
             xb2 = x[b, 2] if is3d is not None else 0.0
             vb2 = v[b, 2] if is3d is not None else 0.0
             p_b = pore[b] if pore is not None else 0.0
-            bed_eroding = False  # b is bed of an eroding soil (free water gets the wall shear instead)
-            if free_water is not None:
-                bed_eroding = suspended[b] == 0 and erodes[material[b]] != 0
             den = w0 = w1 = w2 = g0 = g1 = g2 = 0.0
             for s in range(start[t], start[t + 1]):
                 a = index[s]
@@ -570,7 +580,7 @@ def seepage_on_soil(targets, start, index, x, v, rho, mass, vol, material, drag,
                     f_s = vf[s]
                 free = False
                 if free_water is not None:
-                    free = free_water[a] != 0 and bed_eroding
+                    free = no_drag(free_water[a], suspended[b], erodes[material[b]])
                 if not free:  # free water over the bed: the wall shear instead (bed_shear.py)
                     den += w_s
                     w0 += w_s * (vflat[xa] - vb0)

@@ -20,6 +20,7 @@ from ..particles import FieldSpec
 from ..tensors import N_SYM
 from ..term import Equation, Integrated, Stage, Term
 from . import velocity_gradient
+from .shields_pickup import erosion_materials
 
 
 @kernel
@@ -69,6 +70,7 @@ def soil_rates(
     av_alpha=None, av_beta=None,  # Monaghan artificial viscosity, seed eq. (19)
     is3d=None, mixed=None,
     shear_rate=None,  # mu(I): gamma_dot per row, from the same velocity gradient (docs/rheology.md)
+    suspended=None, suspended_alpha=0.0, suspended_beta=0.0,  # erosion: the AV of pairs with picked-up soil
 ):  # fmt: skip
     """Continuity (6), momentum (20) without seepage, and the Hooke-Jaumann rate (13)-(15).
     Adds into drho and acc; writes ds. The velocity gradient is that of velocity_gradient.py.
@@ -86,7 +88,9 @@ def soil_rates(
     The AV is evaluated for every pair with phi = 0 for receding ones (vr >= 0, where it adds
     exact zeros) rather than behind a branch on the sign of vr: for the benchmark's random
     velocities that branch was mispredicted half the time; branch-free the pass was 5-10 %
-    faster, for random velocities and for a smooth rotation alike (one thread, CPU time)."""
+    faster, for random velocities and for a smooth rotation alike (one thread, CPU time).
+    suspended (erosion, shields_pickup.py; None without): a pair with soil the flow has picked up takes
+    suspended_alpha and suspended_beta, the water's AV constants, instead of the soil's."""
     three = is3d is not None
     dim = 3 if three else 2
     if x.shape[1] != dim or v.shape[1] != dim:
@@ -151,6 +155,8 @@ def soil_rates(
                     beta = 0.5 * (beta_i + av_beta[mj])
                 else:
                     c_bar, alpha, beta = c_i, alpha_i, beta_i
+                if suspended is not None and (suspended[i] != 0 or suspended[j] != 0):
+                    alpha, beta = suspended_alpha, suspended_beta
                 diag -= (-alpha * c_bar + beta * phi) * h * v_in * 2.0 * w
             fm = m_j * fr
             if three:
@@ -218,6 +224,15 @@ class SoilRates(Term):
         self.av_beta = materials.av_beta if av else None
         self.mixed = True if len(soil) > 1 else None
         self.rate_dependent = materials.soil.rate_dependent  # mu(I): write the shear rate
+        # Picked-up soil is a suspension, a fluid: its pairs take the water's AV (seed sec. 2.4: alpha 0.01,
+        # beta 0), not the skeleton's alpha = beta = 1, whose viscosity alpha c h / 8 (c = 94 m/s: 8e4 times
+        # the water's) held the picked-up top row on the bed under a 1 m/s stream (docs/erosion.md)
+        water = materials.ids_of_phase(Phase.WATER)
+        self.suspended_av = (
+            (float(materials.av_alpha[water].max()), float(materials.av_beta[water].max()))
+            if av and erosion_materials(scene, materials)
+            else None
+        )
         self._pair = np.empty((0, PAIR_COLUMNS))
         self.fields = {
             "rho_half": RHO_HALF,
@@ -228,7 +243,9 @@ class SoilRates(Term):
             Integrated("rho", "rho_half", "drho"),
             Integrated("stress_dev", "stress_dev_half", "dstress"),
         )
-        self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev")
+        self.reads = ("x", "v", "rho", "mass", "material", "mean_stress", "stress_dev") + (
+            ("suspended",) if self.suspended_av is not None else ()
+        )
         self.adds_to = ("acc", "drho")
         self.writes = ("dstress",)
         if self.rate_dependent:  # read on owned rows only, by the return mapping (soil_stress.py)
@@ -278,4 +295,6 @@ class SoilRates(Term):
             ctx.is3d,
             self.mixed,
             ps[SHEAR_RATE] if self.rate_dependent else None,
+            ps["suspended"] if self.suspended_av is not None else None,
+            *(self.suspended_av or (0.0, 0.0)),
         )

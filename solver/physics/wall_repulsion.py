@@ -30,6 +30,7 @@ import numpy as np
 from numba import prange
 
 from ..config import kernel
+from ..scene_open import inlet_width
 from ..term import Equation, Stage, Term
 from .wall_images import wall_planes
 
@@ -75,7 +76,7 @@ def largest_height(scene) -> float:
         bottoms.append(heights.min())
     for inlet in scene.inlets:
         origin = np.asarray(inlet.origin, float)
-        width = inlet.width or (inlet.discharge**2 / g_norm) ** (1.0 / 3.0)  # critical depth (Chow 1959)
+        width = inlet_width(inlet, scene.scene.spacing, g_norm)
         speed = inlet.speed or inlet.discharge / width
         if inlet.across is not None:
             across = np.asarray(inlet.across, float)

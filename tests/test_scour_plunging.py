@@ -1,0 +1,80 @@
+"""The plunging scour set-up (issue 24 item 4; docs/scour_plunging.md): the scenes through the
+study's machinery, the convergence verdict, and a coarse run that plunges and erodes."""
+
+import json
+
+import numpy as np
+import pytest
+
+from solver.scene import parse_scene
+from verification import scour_plunging as sp
+from verification import scour_study as st
+from verification.analytic.scour_formulas import critical_depth, rand_1955_drop
+
+
+def test_the_plunging_cases_are_the_shipped_scenes_with_q_dx_and_end_changed():
+    raw = st.scene_raw("saturated", 0.08, 0.0025, 0.5, setup="plunging")
+    assert raw["scene"]["name"] == "plunging_saturated_q0.08_dx2.5mm"
+    assert st.case_name("dry", 0.11, 0.005, setup="plunging") == "plunging_dry_q0.11_dx5mm"
+    assert raw["inlets"][0]["discharge"] == 0.08 and raw["scene"]["spacing"] == 0.0025
+    scene = parse_scene(raw, st.SETUPS["plunging"].scene_path("saturated"))
+    assert scene.materials["sand"].grain_size == 5e-4  # it erodes
+    longer = st.scene_raw("dry", 0.11, 0.005, 0.5, length=0.8, setup="plunging")
+    assert longer["blocks"][0]["max"][0] == pytest.approx(0.8)
+    assert longer["outlets"][0]["min"][0] == pytest.approx(0.8)
+
+
+def test_the_fall_makes_every_q_of_the_seed_plunge():
+    """Rand (1955): the pool under the nappe is shallower than the drop when D = q^2/(g dz^3) < 1,
+    i.e. dz > y_c; the scenes' crown stands sp.FALL above the soil."""
+    raw = st.scene_raw("saturated", 0.11, 0.005, 0.5, setup="plunging")
+    crown = raw["inlets"][0]["origin"][1]
+    soil_top = raw["blocks"][0]["max"][1]
+    assert crown - soil_top == pytest.approx(sp.FALL)
+    q = np.array(st.Q_ALL)
+    geometry = rand_1955_drop(q, sp.FALL)
+    assert np.all(geometry["drop_number"] < 1) and np.all(geometry["pool_depth"] < sp.FALL)
+    assert np.all(critical_depth(q) < sp.FALL)
+    # the nappe's lowest streamline reaches the soil at t = 0: the fall time, to the scenes' 0.1 ms
+    assert raw["inlets"][0]["prefill_time"] == pytest.approx(np.sqrt(2 * sp.FALL / 9.81), abs=1e-4)
+
+
+def _fake_case(soil, dx, scale):
+    t = np.linspace(0.0, 1.0, 41)
+    d = scale * 0.03 * np.sqrt(t)
+    return {"soil": soil, "q": sp.CONVERGENCE_Q, "dx": dx, "t": t, "d_nappe": d, "t_reached": 1.0}
+
+
+def test_the_convergence_verdict_reads_the_differences_to_the_finest_spacing():
+    cases = [_fake_case("saturated", 0.005, 1.08), _fake_case("saturated", 0.0035, 0.97)]
+    cases += [_fake_case("saturated", 0.0025, 1.0)]
+    rows = sp.convergence_rows(cases)
+    assert [r["t"] for r in rows] == list(sp.COMPARE_TIMES)
+    for r in rows:
+        assert r[f"rel_{sp.DX}"] == pytest.approx(0.08) and r[f"rel_{sp.DX_MID}"] == pytest.approx(-0.03)
+    assert not sp.convergence_rows(cases[:2])  # no 2.5 mm run: nothing to compare against
+
+
+@pytest.mark.slow
+def test_a_coarse_plunging_run_erodes_and_carries_the_sand_away(tmp_path):
+    """10 mm to 0.25 s (about a minute): the nappe lands, the sand erodes at the bed (the top row, 10 mm
+    thick, wears through from about 0.2 s), picked-up sand moves off downstream, no particle leaks through
+    a body and the volume balance closes."""
+    from solver.output.hdf5_writer import read_series
+    from solver.run import run_scene
+
+    raw = st.scene_raw("saturated", 0.11, 0.01, 0.25, setup="plunging")
+    raw["output"]["render"] = False
+    scene = parse_scene(raw, st.SETUPS["plunging"].scene_path("saturated"))
+    run_scene(scene, tmp_path / "run", quiet=True)
+    report = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert report["body_leaks"] == 0
+    dv = 0.01**2
+    for name, balance in report["volume_balance"]["materials"].items():
+        assert abs(balance["residual"]) < dv, name  # within one particle volume (README, Scenes)
+    t, last = read_series(tmp_path / "run" / "particles.h5")[-1]
+    assert t == pytest.approx(0.25)
+    sand = last["material"] == 1
+    moved = sand & (last["suspended"] == 1)
+    assert moved.sum() > 0
+    assert np.mean(last["velocity"][moved, 0]) > 0  # carried downstream, away from the jet
