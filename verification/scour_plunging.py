@@ -92,6 +92,17 @@ def convergence_rows(cases):
     return rows
 
 
+def _seconds(s):
+    return f"{s:.0f}" if np.isfinite(s) else "not measured"
+
+
+def _load(c):
+    """The 1-min load average at the run's start and end ("-" for a summary written afterwards)."""
+    if "load_start" not in c:
+        return "-"
+    return f"{c['load_start']:.1f}-{c['load_end']:.1f}"
+
+
 def _runs_section(cases):
     from verification.scour_study import residual
 
@@ -99,9 +110,9 @@ def _runs_section(cases):
         "## Runs",
         "",
         "| case | t reached (s) | d_jet at " + " / ".join(f"{t:g}" for t in COMPARE_TIMES) + " s (mm) "
-        "| x of d_jet at the end (m) | d at the end (mm) | steps | particles | CPU (s) | load | body leaks "
-        "| balance residual (particle volumes) | solver |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| x of d_jet at the end (m) | d at the end (mm) | steps | particles | CPU (s) | wall (s) | load "
+        "| body leaks | balance residual (particle volumes) | solver |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in sorted(cases, key=lambda c: (-c["dx"], c["soil"], c["q"])):
         ds = " / ".join(
@@ -109,8 +120,8 @@ def _runs_section(cases):
         )
         lines.append(
             f"| {c['case']} | {c['t_reached']:.3f} | {ds} | {c['x_nappe'][-1]:.3f} | {1000 * c['d'][-1]:.2f} "
-            f"| {c['steps']} | {c['particles_end']} | {c['cpu_s']:.0f} "
-            f"| {c['load_start']:.1f}-{c['load_end']:.1f} "
+            f"| {c['steps']} | {c['particles_end']} | {_seconds(c['cpu_s'])} | {_seconds(c['wall_s'])} "
+            f"| {_load(c)} "
             f"| {c.get('body_leaks')} | {residual(c):.1g} | {c.get('solver_commit', '')} |"
         )
     return lines
