@@ -1,0 +1,297 @@
+"""Why the bed sinks under the plunging jet (issue 24; docs/scour_plunging.md, "Why the bed sinks
+under the jet"): the plunging scour set-up (solver/scenes/scour_plunging_saturated.toml) run with a
+set of overrides (an ablation), measuring where the hole under the jet comes from.
+
+    python -m verification.jet_deformation run --dx 0.005 --end 0.25 [--set KEY=VALUE ...] [--tag NAME]
+    python -m verification.jet_deformation table      # the ablation table from the results kept
+
+What a run measures, under the jet (soil particles that started at JET_ZONE[0] < x < JET_ZONE[1]):
+- the scour measure's depth d (solver/output/scour.py: the bed without the suspended soil and the worn
+  shares), over the jet zone;
+- the *eroded* part: the suspended particles' area plus the worn shares of the others that started in the
+  zone, as an equivalent depth (area / zone width);
+- the *deforming* part: the mean downward displacement of the bed (non-suspended) particles that started
+  at a given depth below the surface (10, 20, 40 mm: interpolated between the rows either side), and
+  their mean volumetric strain rho0 / rho - 1 (the skeleton's own compression: < 0 compacted);
+- the state of the top rows: the vertical effective stress sigma'_v = p - s_yy (seed eq. 12, compression
+  positive), the share of particles on the yield surface (solver/physics/soil_stress.yield_excess > -1e-3),
+  the pore pressure in excess of hydrostatic and its vertical gradient i against the critical gradient
+  i_c = gamma' / gamma_w (Terzaghi 1943), beside and under the jet;
+- a time series every SERIES_EVERY s (t, p_max, p_mean, sink, sigma'_v): the largest and the mean water
+  pressure within dx of the initial surface under the jet (the impact transient), the mean sinkage (mm) of
+  the row that started nearest 10 mm down and its mean sigma'_v.
+The results go to verification/results/jet_deformation/<tag>_dx<dx>mm.json with the CPU and wall time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from verification import seepage_common as sc
+
+RESULTS = Path(__file__).with_name("results") / "jet_deformation"
+Q = 0.11  # the study's case of the issue (saturated, q = 0.11)
+SURFACE = 0.105  # m, the layer's top (scour_plunging_saturated.toml)
+JET_ZONE = (0.15, 0.25)  # m, where the nappe lands (docs/scour_plunging.md: the jet's lower surface at x ~ 0.15 m)
+BESIDE = (0.25, 0.35)  # m, downstream of the landing, where the bed heaves
+DEPTHS = (0.010, 0.020, 0.040)  # m below the surface: the rows the issue's split reports
+SERIES_EVERY = 5.0e-4  # s
+YIELDED = -1.0e-3  # yield_excess above this: on the yield surface (the return mapping lands on f = 0)
+G = 9.81
+
+
+def scene(dx, end, sets=()):
+    from solver.scene import parse_scene
+    from verification.scour_study import SETUPS, scene_raw
+
+    raw = scene_raw("saturated", Q, dx, end, sets=list(sets) + ["output.render=false"], setup="plunging")
+    return parse_scene(raw, SETUPS["plunging"].scene_path("saturated"))
+
+
+def _soil(sim):
+    return sc.soil_rows(sim)
+
+
+def _water(sim):
+    return sc.water_rows(sim)
+
+
+class Probe:
+    """The measures above, from the initial state of the soil particles (by id)."""
+
+    def __init__(self, sim):
+        from solver.output.scour import grid_for_scene
+
+        ps = sim.particles
+        soil = _soil(sim)
+        self.dx = sim.scene.scene.spacing
+        self.ids0 = ps["id"][soil].copy()
+        self.x0 = ps["x"][soil, :2].copy()
+        self.rho0 = float(sim.plan.materials.rho0[ps["material"][soil[0]]])
+        self.grid = grid_for_scene(sim.scene)
+        self.zone = (self.grid.x_bins > JET_ZONE[0]) & (self.grid.x_bins < JET_ZONE[1])
+        self.z0 = self._surface(sim)
+        self.depth0 = SURFACE - self.x0[:, 1]
+        self.in_zone = (self.x0[:, 0] > JET_ZONE[0]) & (self.x0[:, 0] < JET_ZONE[1])
+        self.rows = np.unique(np.round(self.depth0, 9))
+        mat = sim.scene.materials["sand"]
+        n = mat.porosity
+        self.gamma_dash = (mat.density - (1.0 - n) * 1000.0) * G  # (1 - n)(rho_grain - rho_w) g
+        self.i_c = self.gamma_dash / (1000.0 * G)
+        self.soil_model = sim.plan.materials.soil
+        self.series = []
+        self._next = 0.0
+
+    def _surface(self, sim):
+        from solver.output.scour import surface_profile
+
+        ps = sim.particles
+        soil = _soil(sim)
+        bed = soil[ps["suspended"][soil] == 0] if "suspended" in ps else soil
+        worn = ps["eroded_share"][bed] if "eroded_share" in ps else np.zeros(len(bed))
+        return surface_profile(ps["x"][bed, :2], self.grid, np.clip(1.0 - worn, 0.0, 1.0))
+
+    def _aligned(self, sim, name):
+        """A soil field in the order of the initial soil particles (NaN-free: soil never leaves here,
+        the outlet is over the end wall; a particle that did leave is dropped by `alive`)."""
+        ps = sim.particles
+        soil = _soil(sim)
+        order = np.argsort(ps["id"][soil])
+        ids = ps["id"][soil][order]
+        pos = np.searchsorted(ids, self.ids0)
+        pos = np.clip(pos, 0, len(ids) - 1)
+        alive = ids[pos] == self.ids0
+        return ps[name][soil][order][pos], alive
+
+    def sample(self, sim):
+        ps = sim.particles
+        x, alive = self._aligned(sim, "x")
+        susp = (self._aligned(sim, "suspended")[0] != 0) if "suspended" in ps else np.zeros(len(x), bool)
+        worn = self._aligned(sim, "eroded_share")[0] if "eroded_share" in ps else np.zeros(len(x))
+        rho = self._aligned(sim, "rho")[0]
+        bed = alive & ~susp
+        sink = self.x0[:, 1] - x[:, 1]
+        zone = self.in_zone
+        # the hole: the scour measure over the jet zone
+        z = self._surface(sim)
+        drop = (self.z0 - z)[self.zone]
+        beside = (self.grid.x_bins > BESIDE[0]) & (self.grid.x_bins < BESIDE[1])
+        width = JET_ZONE[1] - JET_ZONE[0]
+        eroded = (np.sum(zone & susp) + np.sum(np.clip(worn[zone & ~susp], 0.0, 1.0))) * self.dx**2 / width
+        rows = {}
+        for d in self.rows[self.rows < 0.06]:
+            sel = zone & bed & (np.abs(self.depth0 - d) < 1e-9)
+            if sel.any():
+                rows[f"{d * 1000:.2f}"] = {
+                    "sink_mm": 1000 * float(sink[sel].mean()),
+                    "sink_max_mm": 1000 * float(sink[sel].max()),
+                    "dx_mm": 1000 * float(np.abs(x[sel, 0] - self.x0[sel, 0]).mean()),
+                    "vol_strain": float((self.rho0 / rho[sel] - 1.0).mean()),
+                }
+        keys = sorted(rows, key=float)
+        depths = np.array([float(k) / 1000 for k in keys])
+        at = {}
+        for d in DEPTHS:
+            at[f"{d * 1000:g}"] = {
+                q: float(np.interp(d, depths, [rows[k][q] for k in keys])) for q in ("sink_mm", "vol_strain")
+            }
+        out = {
+            "t": float(sim.t),
+            "d_jet_mm": 1000 * float(max(drop.max(), 0.0)),
+            "eroded_mm": 1000 * float(eroded),
+            "suspended": int(np.sum(susp & zone)),
+            "rise_beside_mm": 1000 * float((z - self.z0)[beside].max()),
+            "drop_beside_mm": 1000 * float((self.z0 - z)[beside].max()),
+            "at_depth": at,
+            "rows": rows,
+        }
+        out.update(self.state(sim, z))
+        return out
+
+    def state(self, sim, z_surface):
+        """Under and beside the jet, by depth below the bed's current surface (bands dx thick, the top
+        8): the skeleton's vertical and horizontal effective stress (compression positive), the share
+        on the yield surface, and the water's head h = p / gamma_w + y (every water particle in the band,
+        pore or free), its RMS scatter in the band (the acoustic and odd-even noise), and the vertical
+        head gradient i = dh/dy between bands (> 0: flow down; upward flow beats gravity at -i > i_c)."""
+        from solver.physics.soil_stress import yield_excess
+
+        ps = sim.particles
+        soil = _soil(sim)
+        water = _water(sim)
+        res = {}
+        bed = soil[ps["suspended"][soil] == 0] if "suspended" in ps else soil
+        xs, ys = ps["x"][bed, 0], ps["x"][bed, 1]
+        ds = np.interp(xs, self.grid.x_bins, z_surface) - ys
+        sv = ps["mean_stress"][bed] - ps["stress_dev"][bed, 1]
+        sh = ps["mean_stress"][bed] - ps["stress_dev"][bed, 0]
+        f = yield_excess(bed, ps["mean_stress"], ps["stress_dev"], ps["material"], self.soil_model)
+        xw, yw = ps["x"][water, 0], ps["x"][water, 1]
+        dw = np.interp(xw, self.grid.x_bins, z_surface) - yw
+        head = ps["p"][water] / (1000.0 * G) + yw
+        edges = self.dx * np.arange(0, 9)  # depth bands, top down
+        centres = 0.5 * (edges[:-1] + edges[1:])
+
+        def prof(sel, d, v, fn=np.mean):
+            out = []
+            for a, b in zip(edges[:-1], edges[1:]):
+                m = sel & (d >= a) & (d < b)
+                out.append(float(fn(v[m])) if m.sum() else None)
+            return out
+
+        for name, (lo, hi) in (("jet", JET_ZONE), ("beside", BESIDE)):
+            s_band = (xs > lo) & (xs < hi)
+            w_band = (xw > lo) & (xw < hi)
+            h_prof = prof(w_band, dw, head)
+            ok = [k for k, v in enumerate(h_prof) if v is not None]
+            grads = [
+                (h_prof[b] - h_prof[a]) / (centres[b] - centres[a]) for a, b in zip(ok[:-1], ok[1:]) if b == a + 1
+            ]  # dh/d(depth): > 0 head rising with depth = upward flow; i = dh/dy = -dh/d(depth)
+            i_vals = [-g for g in grads]
+            res[name] = {
+                "depth_mm": [round(1000 * c, 3) for c in centres],
+                "sigma_v_eff_pa": prof(s_band, ds, sv),
+                "sigma_h_eff_pa": prof(s_band, ds, sh),
+                "yielded_share": prof(s_band, ds, (f > YIELDED).astype(float)),
+                "head_mm": [None if v is None else 1000 * v for v in h_prof],
+                "head_rms_mm": prof(w_band, dw, head, lambda v: 1000 * float(np.std(v))),
+                "i_top": i_vals[0] if i_vals else None,
+                "i_min": min(i_vals) if i_vals else None,
+                "i_max": max(i_vals) if i_vals else None,
+            }
+        res["i_c"] = self.i_c
+        return res
+
+    def on_step(self, sim):
+        if sim.t + 1e-12 < self._next:
+            return
+        self._next += SERIES_EVERY
+        ps = sim.particles
+        water = _water(sim)
+        x = ps["x"][water]
+        near = (x[:, 0] > JET_ZONE[0]) & (x[:, 0] < JET_ZONE[1]) & (np.abs(x[:, 1] - SURFACE) < self.dx)
+        p_near = ps["p"][water][near]
+        p_max = float(p_near.max()) if near.any() else 0.0
+        p_mean = float(p_near.mean()) if near.any() else 0.0
+        soil = _soil(sim)
+        # the row nearest 10 mm down: its mean sinkage (by id: the rows are re-sorted in cell order)
+        d_row = self.rows[np.argmin(np.abs(self.rows - DEPTHS[0]))]
+        want = self.ids0[self.in_zone & (np.abs(self.depth0 - d_row) < 1e-9)]
+        sel = np.isin(ps["id"][soil], want)
+        y0 = SURFACE - d_row
+        sink = float((y0 - ps["x"][soil][sel, 1]).mean()) if sel.any() else np.nan
+        sv = ps["mean_stress"][soil][sel] - ps["stress_dev"][soil][sel, 1]
+        self.series.append((float(sim.t), p_max, p_mean, 1000 * sink, float(np.mean(sv))))
+
+
+def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
+    from solver.simulation import Simulation
+
+    sim = Simulation(scene(dx, end, sets))
+    probe = Probe(sim)
+    times = list(np.round(np.arange(every, end + 1e-9, every), 9))
+    load0 = os.getloadavg()[0]
+    samples, wall, cpu = sc.run_timed(sim, times, probe.sample, on_step=probe.on_step)
+    result = {
+        "tag": tag,
+        "dx": dx,
+        "end": end,
+        "sets": list(sets),
+        "steps": sim.step_count,
+        "cpu_s": cpu,
+        "wall_s": wall,
+        "load": [load0, os.getloadavg()[0]],
+        "threads": int(os.environ.get("NUMBA_NUM_THREADS", "0")),
+        "command": "python -m verification.jet_deformation run --dx {} --end {}{} --tag {}".format(
+            dx, end, "".join(f" --set {s}" for s in sets), tag
+        ),
+        "i_c": probe.i_c,
+        "samples": samples,
+        "series": probe.series,
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{tag}_dx{dx * 1000:g}mm.json"
+    path.write_text(json.dumps(result, indent=1) + "\n")
+    last = samples[-1]
+    print(
+        f"{tag} dx={dx * 1000:g} mm t={last['t']:.3f}: d_jet {last['d_jet_mm']:.2f} mm, eroded {last['eroded_mm']:.2f} mm,"
+        f" sink@10/20/40 {[round(v['sink_mm'], 2) for v in last['at_depth'].values()]} mm;"
+        f" {cpu:.0f} s CPU, {wall:.0f} s wall, {sim.step_count} steps",
+        flush=True,
+    )
+    return result
+
+
+def load(out=RESULTS):
+    return [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--dx", type=float, default=0.005)
+    r.add_argument("--end", type=float, default=0.25)
+    r.add_argument("--set", action="append", default=[])
+    r.add_argument("--tag", default="base")
+    r.add_argument("--every", type=float, default=0.05)
+    sub.add_parser("table")
+    a = ap.parse_args(argv)
+    if a.cmd == "run":
+        run(a.dx, a.end, a.set, a.tag, a.every)
+    else:
+        for c in load():
+            last = c["samples"][-1]
+            print(c["tag"], c["dx"], last["t"], last["d_jet_mm"], last["eroded_mm"], last["at_depth"], c["cpu_s"])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
