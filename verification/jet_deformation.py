@@ -29,7 +29,6 @@ import argparse
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -39,10 +38,17 @@ from verification import seepage_common as sc
 RESULTS = Path(__file__).with_name("results") / "jet_deformation"
 Q = 0.11  # the study's case of the issue (saturated, q = 0.11)
 SURFACE = 0.105  # m, the layer's top (scour_plunging_saturated.toml)
-JET_ZONE = (0.15, 0.25)  # m, where the nappe lands (docs/scour_plunging.md: the jet's lower surface at x ~ 0.15 m)
+JET_ZONE = (
+    0.15,
+    0.25,
+)  # m, where the nappe lands (docs/scour_plunging.md: the jet's lower surface at x ~ 0.15 m)
 BESIDE = (0.25, 0.35)  # m, downstream of the landing, where the bed heaves
 DEPTHS = (0.010, 0.020, 0.040)  # m below the surface: the rows the issue's split reports
 SERIES_EVERY = 5.0e-4  # s
+FIELD_WINDOWS = ((0.05, 0.15), (0.15, 0.25))  # s: the fields are averaged over these windows
+FIELD_TOP = 0.14  # m: the grid reaches 35 mm above the layer's top (the water over the bed)
+# per cell: water count and head sum, soil count and sums of sigma'_v, sigma'_h, yielded, v_y
+FIELD_SUMS = ("n_w", "head", "n_s", "sv", "sh", "yielded", "vy")
 YIELDED = -1.0e-3  # yield_excess above this: on the yield surface (the return mapping lands on f = 0)
 G = 9.81
 
@@ -88,6 +94,10 @@ class Probe:
         self.soil_model = sim.plan.materials.soil
         self.series = []
         self._next = 0.0
+        # time-averaged fields on a fixed grid of dx cells (FIELD_WINDOWS): the noise averages out
+        self.nx = int(round(0.63 / self.dx))
+        self.ny = int(round(FIELD_TOP / self.dx))
+        self.fields = {w: {k: np.zeros((self.nx, self.ny)) for k in FIELD_SUMS} for w in FIELD_WINDOWS}
 
     def _surface(self, sim):
         from solver.output.scour import surface_profile
@@ -192,7 +202,9 @@ class Probe:
             h_prof = prof(w_band, dw, head)
             ok = [k for k, v in enumerate(h_prof) if v is not None]
             grads = [
-                (h_prof[b] - h_prof[a]) / (centres[b] - centres[a]) for a, b in zip(ok[:-1], ok[1:]) if b == a + 1
+                (h_prof[b] - h_prof[a]) / (centres[b] - centres[a])
+                for a, b in zip(ok[:-1], ok[1:])
+                if b == a + 1
             ]  # dh/d(depth): > 0 head rising with depth = upward flow; i = dh/dy = -dh/d(depth)
             i_vals = [-g for g in grads]
             res[name] = {
@@ -229,6 +241,122 @@ class Probe:
         sink = float((y0 - ps["x"][soil][sel, 1]).mean()) if sel.any() else np.nan
         sv = ps["mean_stress"][soil][sel] - ps["stress_dev"][soil][sel, 1]
         self.series.append((float(sim.t), p_max, p_mean, 1000 * sink, float(np.mean(sv))))
+        for w, acc in self.fields.items():
+            if w[0] <= sim.t < w[1]:
+                self._accumulate(sim, acc, water, soil)
+
+    def _cells(self, x):
+        i = np.clip((x[:, 0] / self.dx).astype(np.int64), 0, self.nx - 1)
+        j = np.clip((x[:, 1] / self.dx).astype(np.int64), 0, self.ny - 1)
+        return i, j
+
+    def _accumulate(self, sim, acc, water, soil):
+        from solver.physics.soil_stress import yield_excess
+
+        ps = sim.particles
+        i, j = self._cells(ps["x"][water])
+        np.add.at(acc["n_w"], (i, j), 1.0)
+        np.add.at(acc["head"], (i, j), ps["p"][water] / (1000.0 * G) + ps["x"][water, 1])
+        bed = soil[ps["suspended"][soil] == 0] if "suspended" in ps else soil
+        i, j = self._cells(ps["x"][bed])
+        f = yield_excess(bed, ps["mean_stress"], ps["stress_dev"], ps["material"], self.soil_model)
+        np.add.at(acc["n_s"], (i, j), 1.0)
+        np.add.at(acc["sv"], (i, j), ps["mean_stress"][bed] - ps["stress_dev"][bed, 1])
+        np.add.at(acc["sh"], (i, j), ps["mean_stress"][bed] - ps["stress_dev"][bed, 0])
+        np.add.at(acc["yielded"], (i, j), (f > YIELDED).astype(float))
+        np.add.at(acc["vy"], (i, j), ps["v"][bed, 1])
+
+    def mean_fields(self):
+        """{window: {name: mean over the window per cell (NaN where nothing was)}} for the npz."""
+        out = {}
+        for w, acc in self.fields.items():
+            tag = f"{w[0]:g}-{w[1]:g}"
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out[f"head_{tag}"] = acc["head"] / acc["n_w"]
+                out[f"nw_{tag}"] = acc["n_w"]
+                for k in ("sv", "sh", "yielded", "vy"):
+                    out[f"{k}_{tag}"] = acc[k] / acc["n_s"]
+                out[f"ns_{tag}"] = acc["n_s"]
+        return out
+
+
+def steady_head(x, head_top, depth=SURFACE, length=0.63, y=None):
+    """Darcy's steady head in the layer (Laplace's equation: the seepage is steady once the drainage
+    time D^2 / c_v,eff has passed, 0.05 s for D = 0.105 m at c = 30 m/s, docs/seepage.md), for a head
+    head_top(x) on its top (the water's over the bed) and no flow through its base and end walls:
+        h(x, y) = sum_k a_k cos(k pi x / L) cosh(k pi y / L) / cosh(k pi D / L),
+    a_k the cosine coefficients of head_top (a half-range cosine series satisfies dh/dx = 0 at
+    x = 0, L; cosh satisfies dh/dy = 0 at the base y = 0). Returns (h, dh/dy) at (x, y) (y: the
+    heights, default the top); dh/dy < 0 below the top is downward flow, > 0 upward."""
+    x = np.asarray(x, float)
+    y = np.array([depth]) if y is None else np.asarray(y, float)
+    # the coefficients from head_top sampled at x (bins of equal width over 0..L, midpoint rule)
+    w = length / len(x)
+    k = np.arange(len(x))  # as many modes as samples: the DCT-II, exact at the samples
+    basis = np.cos(np.outer(k, np.pi * x / length))
+    a = basis @ head_top * w * 2.0 / length
+    a[0] *= 0.5
+    kk = k[:, None] * np.pi / length
+    # cosh(k y)/cosh(k D) without overflow: exp(k (y - D)) (1 + exp(-2 k y)) / (1 + exp(-2 k D))
+    ratio = (
+        np.exp(kk * (y[None, :] - depth)) * (1 + np.exp(-2 * kk * y[None, :])) / (1 + np.exp(-2 * kk * depth))
+    )
+    dratio = (
+        kk
+        * np.exp(kk * (y[None, :] - depth))
+        * (1 - np.exp(-2 * kk * y[None, :]))
+        / (1 + np.exp(-2 * kk * depth))
+    )
+    h = np.einsum("k,kx,ky->xy", a, basis, ratio)
+    dh = np.einsum("k,kx,ky->xy", a, basis, dratio)
+    return h, dh
+
+
+def seepage_check(npz, window="0.15-0.25", depths=(0.005, 0.010, 0.020)):
+    """The run's time-averaged head in the bed against Darcy's steady head for the same load, and
+    Terzaghi's (1943) heave check beside the jet. The load: the mean head of the water in the cell
+    above the bed's top cell in each column (the bed: cells more than half full of soil; a column
+    with no water there gets the head of an empty surface, its height: p = 0). Darcy: steady_head
+    of that load in the layer as it started (the hole's few mm left out). Heave: a soil prism of
+    depth d at x fails when the excess head it holds, h(x, top - d) - h(x, top), exceeds i_c d
+    (i_c = gamma' / gamma_w): the factor of safety F(x, d) = i_c d / (h(top - d) - h(top)), taken
+    from Darcy's head. Returns a dict: x, the load, the run's and Darcy's head two cells down (the
+    mean of two rows, which cancels the odd-even mode), and the smallest F per depth with where."""
+    z = np.load(npz)
+    dx = float(z["dx"])
+    head, n_s = z[f"head_{window}"], z[f"ns_{window}"]
+    full = n_s / np.nanmax(n_s)
+    nx = head.shape[0]
+    x = (np.arange(nx) + 0.5) * dx
+    top = np.array([np.flatnonzero(full[i] > 0.5).max() for i in range(nx)])
+    load = np.array(
+        [head[i, top[i] + 1] if np.isfinite(head[i, top[i] + 1]) else (top[i] + 1.5) * dx for i in range(nx)]
+    )
+    rows = int(round(SURFACE / dx))
+    y = (np.arange(rows) + 0.5) * dx
+    darcy, _ = steady_head(x, load, y=y)
+    run_two = np.array([0.5 * (head[i, top[i] - 2] + head[i, top[i] - 3]) for i in range(nx)])
+    darcy_two = np.array([0.5 * (darcy[i, top[i] - 2] + darcy[i, top[i] - 3]) for i in range(nx)])
+    mat_n, rho_dry = 0.35, 1800.0  # scour_plunging_saturated.toml
+    i_c = (rho_dry - (1 - mat_n) * 1000.0) / 1000.0
+    y_top = SURFACE
+    h_top, _ = steady_head(x, load, y=[y_top])
+    out = {
+        "x": x,
+        "load": load,
+        "run_two_down": run_two,
+        "darcy_two_down": darcy_two,
+        "i_c": i_c,
+        "heave": {},
+    }
+    for d in depths:
+        h_d, _ = steady_head(x, load, y=[y_top - d])
+        excess = h_d[:, 0] - h_top[:, 0]
+        with np.errstate(divide="ignore"):
+            f = np.where(excess > 0, i_c * d / excess, np.inf)
+        k = int(np.argmin(f))
+        out["heave"][d] = (float(f[k]), float(x[k]), f)
+    return out
 
 
 def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
@@ -259,9 +387,11 @@ def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{tag}_dx{dx * 1000:g}mm.json"
     path.write_text(json.dumps(result, indent=1) + "\n")
+    np.savez_compressed(path.with_suffix(".npz"), dx=dx, **probe.mean_fields())
     last = samples[-1]
     print(
-        f"{tag} dx={dx * 1000:g} mm t={last['t']:.3f}: d_jet {last['d_jet_mm']:.2f} mm, eroded {last['eroded_mm']:.2f} mm,"
+        f"{tag} dx={dx * 1000:g} mm t={last['t']:.3f}: d_jet {last['d_jet_mm']:.2f} mm,"
+        f" eroded {last['eroded_mm']:.2f} mm,"
         f" sink@10/20/40 {[round(v['sink_mm'], 2) for v in last['at_depth'].values()]} mm;"
         f" {cpu:.0f} s CPU, {wall:.0f} s wall, {sim.step_count} steps",
         flush=True,
@@ -271,6 +401,26 @@ def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
 
 def load(out=RESULTS):
     return [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
+
+
+def table(cases, at=0.25):
+    """The ablation table (markdown): per run at time `at`, the jet zone's hole, its eroded part, the
+    mean sinkage of the bed that started 10 / 20 / 40 mm down, and the run's command and CPU time."""
+    head = (
+        "| run | dx (mm) | d under the jet (mm) | eroded (mm) | sinkage at 10 / 20 / 40 mm (mm) | steps |"
+        " CPU (s) | command (`python -m verification.jet_deformation run ...`) |\n|---|---|---|---|---|---|---|---|"
+    )
+    rows = []
+    for c in sorted(cases, key=lambda c: (-c["dx"], c["tag"] != "base", c["tag"])):
+        s = min(c["samples"], key=lambda s: abs(s["t"] - at))
+        sink = " / ".join(f"{v['sink_mm']:.2f}" for v in s["at_depth"].values())
+        sets = " ".join(f"--set {x}" for x in c["sets"])
+        rows.append(
+            f"| {c['tag']} | {c['dx'] * 1000:g} | {s['d_jet_mm']:.1f} | {s['eroded_mm']:.2f} | {sink} |"
+            f" {c['steps']} | {c['cpu_s']:.0f} |"
+            f" `--dx {c['dx']} --end {c['end']:g} --tag {c['tag']} {sets}` |"
+        )
+    return "\n".join([head] + rows)
 
 
 def main(argv=None):
@@ -287,9 +437,7 @@ def main(argv=None):
     if a.cmd == "run":
         run(a.dx, a.end, a.set, a.tag, a.every)
     else:
-        for c in load():
-            last = c["samples"][-1]
-            print(c["tag"], c["dx"], last["t"], last["d_jet_mm"], last["eroded_mm"], last["at_depth"], c["cpu_s"])
+        print(table(load()))
     return 0
 
 
