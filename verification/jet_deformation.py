@@ -408,7 +408,8 @@ def table(cases, at=0.25):
     mean sinkage of the bed that started 10 / 20 / 40 mm down, and the run's command and CPU time."""
     head = (
         "| run | dx (mm) | d under the jet (mm) | eroded (mm) | sinkage at 10 / 20 / 40 mm (mm) | steps |"
-        " CPU (s) | command (`python -m verification.jet_deformation run ...`) |\n|---|---|---|---|---|---|---|---|"
+        " CPU (s) | command (`python -m verification.jet_deformation run ...`) |"
+        "\n|---|---|---|---|---|---|---|---|"
     )
     rows = []
     for c in sorted(cases, key=lambda c: (-c["dx"], c["tag"] != "base", c["tag"])):
