@@ -312,51 +312,90 @@ def steady_head(x, head_top, depth=SURFACE, length=0.63, y=None):
     return h, dh
 
 
-def seepage_check(npz, window="0.15-0.25", depths=(0.005, 0.010, 0.020)):
-    """The run's time-averaged head in the bed against Darcy's steady head for the same load, and
-    Terzaghi's (1943) heave check beside the jet. The load: the mean head of the water in the cell
-    above the bed's top cell in each column (the bed: cells more than half full of soil; a column
-    with no water there gets the head of an empty surface, its height: p = 0). Darcy: steady_head
-    of that load in the layer as it started (the hole's few mm left out). Heave: a soil prism of
-    depth d at x fails when the excess head it holds, h(x, top - d) - h(x, top), exceeds i_c d
-    (i_c = gamma' / gamma_w): the factor of safety F(x, d) = i_c d / (h(top - d) - h(top)), taken
-    from Darcy's head. Returns a dict: x, the load, the run's and Darcy's head two cells down (the
-    mean of two rows, which cancels the odd-even mode), and the smallest F per depth with where."""
+PENETRATION_DEPTHS = ((0.005, 0.015), (0.015, 0.03), (0.03, 0.05))  # m below the bed's top cell
+HEAVE_DEPTHS = (0.005, 0.010, 0.020, 0.040)  # m: prisms of Terzaghi's heave check
+SIDES = {"upstream": (0.05, 0.15), "downstream": (0.25, 0.40)}  # m: where the check looks, beside the jet
+LOAD_SMOOTHING = 0.02  # m: running mean of the bed load (the footprint is ~0.1 m; the raw mean is noisy)
+WET = 0.5  # water particles per sample in a cell above the bed for its head to count as the load (else p = 0)
+
+
+def seepage_check(npz, window="0.15-0.25", smoothing=LOAD_SMOOTHING):
+    """The run's time-averaged pore pressure against Darcy's for the same load, and Terzaghi's heave
+    check beside the jet.
+
+    The load: per column the mean head of the water in the two cells above the bed's top cell (the
+    bed: cells more than half full of soil; cells with at least WET water particles per sample; p = 0,
+    the head of an empty surface, where neither is), run through a mean over `smoothing`. Darcy:
+    steady_head of that load in the layer as it started (the hole's few mm left out). Penetration:
+    under the jet (JET_ZONE), the run's excess head (over the hydrostatic head of a water table at
+    the layer's top) at PENETRATION_DEPTHS below the
+    bed's top cell against Darcy's at the same cells, 1 when the jet's pressure has drained into the
+    bed as Darcy says. Heave (Terzaghi 1943): a prism of depth d fails when the excess head at its foot
+    over its top exceeds i_c d, i_c = gamma' / gamma_w; F = i_c d / (h(top - d) - h(top)) from Darcy's
+    head, the smallest over each side of SIDES."""
     z = np.load(npz)
     dx = float(z["dx"])
-    head, n_s = z[f"head_{window}"], z[f"ns_{window}"]
-    full = n_s / np.nanmax(n_s)
+    head, n_s, n_w = z[f"head_{window}"], z[f"ns_{window}"], z[f"nw_{window}"]
+    samples = np.nanmax(n_s)  # a cell full of soil holds one soil particle at every sample
+    full, wet = n_s / samples, n_w / samples
     nx = head.shape[0]
     x = (np.arange(nx) + 0.5) * dx
-    top = np.array([np.flatnonzero(full[i] > 0.5).max() for i in range(nx)])
-    load = np.array(
-        [head[i, top[i] + 1] if np.isfinite(head[i, top[i] + 1]) else (top[i] + 1.5) * dx for i in range(nx)]
-    )
     rows = int(round(SURFACE / dx))
+    top = np.array([np.flatnonzero(f > 0.5).max() if (f > 0.5).any() else rows - 1 for f in full])
+    load = np.empty(nx)
+    for i in range(nx):
+        above = [head[i, top[i] + k] for k in (1, 2) if wet[i, top[i] + k] >= WET]
+        load[i] = np.mean(above) if above else (top[i] + 1.5) * dx
+    k = max(1, int(round(smoothing / dx)))
+    load = np.convolve(np.pad(load, (k // 2, k - 1 - k // 2), mode="edge"), np.ones(k) / k, mode="valid")
     y = (np.arange(rows) + 0.5) * dx
     darcy, _ = steady_head(x, load, y=y)
-    run_two = np.array([0.5 * (head[i, top[i] - 2] + head[i, top[i] - 3]) for i in range(nx)])
-    darcy_two = np.array([0.5 * (darcy[i, top[i] - 2] + darcy[i, top[i] - 3]) for i in range(nx)])
-    mat_n, rho_dry = 0.35, 1800.0  # scour_plunging_saturated.toml
-    i_c = (rho_dry - (1 - mat_n) * 1000.0) / 1000.0
-    y_top = SURFACE
-    h_top, _ = steady_head(x, load, y=[y_top])
-    out = {
-        "x": x,
-        "load": load,
-        "run_two_down": run_two,
-        "darcy_two_down": darcy_two,
-        "i_c": i_c,
-        "heave": {},
-    }
-    for d in depths:
-        h_d, _ = steady_head(x, load, y=[y_top - d])
+    jet = np.flatnonzero((x > JET_ZONE[0]) & (x < JET_ZONE[1]))
+    penetration = []
+    for d0, d1 in PENETRATION_DEPTHS:
+        run_ex, darcy_ex = [], []
+        for i in jet:
+            depth = (top[i] + 1) * dx - y  # below the top of the bed's top cell
+            cells = [
+                j for j in np.flatnonzero((depth > d0) & (depth <= d1 + 1e-9)) if np.isfinite(head[i, j])
+            ]
+            if cells:
+                run_ex.append(np.mean([head[i, j] - SURFACE for j in cells]))
+                darcy_ex.append(np.mean([darcy[i, j] - SURFACE for j in cells]))
+        penetration.append(float(np.mean(run_ex) / np.mean(darcy_ex)))
+    i_c = 1.15  # (rho_dry - (1 - n) rho_w) / rho_w, scour_plunging_saturated.toml: (1800 - 650) / 1000
+    h_top, _ = steady_head(x, load, y=[SURFACE])
+    heave = {}
+    for d in HEAVE_DEPTHS:
+        h_d, _ = steady_head(x, load, y=[SURFACE - d])
         excess = h_d[:, 0] - h_top[:, 0]
-        with np.errstate(divide="ignore"):
-            f = np.where(excess > 0, i_c * d / excess, np.inf)
-        k = int(np.argmin(f))
-        out["heave"][d] = (float(f[k]), float(x[k]), f)
-    return out
+        f = np.where(excess > 0, i_c * d / np.maximum(excess, 1e-12), np.inf)
+        for side, (lo, hi) in SIDES.items():
+            sel = (x > lo) & (x < hi)
+            j = int(np.argmin(np.where(sel, f, np.inf)))
+            heave[(side, d)] = (float(f[j]), float(x[j]))
+    return {"x": x, "load": load, "penetration": penetration, "heave": heave, "i_c": i_c}
+
+
+def check_table(out=RESULTS, window="0.15-0.25"):
+    """seepage_check of every run kept with its fields (markdown)."""
+    lines = [
+        "| run | dx (mm) | jet load (kPa above hydrostatic, max) | penetration at 5-15 / 15-30 / 30-50 mm |"
+        " heave F upstream, d = 5 / 10 / 20 / 40 mm | downstream |",
+        "|---|---|---|---|---|---|",
+    ]
+    for npz in sorted(out.glob("*.npz")):
+        r = seepage_check(npz, window)
+        jet = (r["x"] > JET_ZONE[0]) & (r["x"] < JET_ZONE[1])
+        pen = " / ".join(f"{v:.2f}" for v in r["penetration"])
+        up = " / ".join(f"{r['heave'][('upstream', d)][0]:.2f}" for d in HEAVE_DEPTHS)
+        down = " / ".join(f"{r['heave'][('downstream', d)][0]:.2f}" for d in HEAVE_DEPTHS)
+        load = (r["load"][jet].max() - SURFACE) * 1000.0 * G / 1000.0
+        dx = float(np.load(npz)["dx"])
+        lines.append(
+            f"| {npz.stem.rsplit('_dx', 1)[0]} | {dx * 1000:g} | {load:.2f} | {pen} | {up} | {down} |"
+        )
+    return "\n".join(lines)
 
 
 def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
@@ -399,6 +438,102 @@ def run(dx, end, sets=(), tag="base", every=0.05, out=RESULTS):
     return result
 
 
+# m, by where the bed particles started: under the void behind the nappe, under its landing, under the
+# rest of the jet, and downstream
+BUDGET_ZONES = {
+    "upstream": (0.08, 0.145),
+    "landing": (0.15, 0.20),
+    "jet": (0.20, 0.25),
+    "beside": (0.25, 0.35),
+}
+
+
+def force_budget(sim, probe, sums):
+    """Add, per zone of BUDGET_ZONES and per initial soil row (k = 0 the top row), the vertical and
+    horizontal force per unit volume rho a (N/m^3) that each rates term puts on the bed's particles,
+    the soil pass split into its stress divergence and its artificial viscosity, into `sums`
+    {(term, zone, k): [fx, fy, count]}. The rates are taken at the current time exactly as a step
+    takes them (predict, the state stage, the rates stage term by term), and every array they
+    touch is put back, so the run goes on as without the budget (a scene without pick-up only: the
+    state stage's pick-up would erode twice)."""
+    from solver.term import Stage
+
+    ps = sim.particles
+    n = ps.n_owned
+    names = {f.value for f in sim.plan.integrated} | {f.rate for f in sim.plan.integrated}
+    names |= set(sim.plan.accumulated) | {"p", "mean_stress", "stress_dev", "pore_pressure"}
+    saved = {k: ps[k].copy() for k in names if k in ps}
+    sim.predict()
+    for k in sim.plan.accumulated:
+        ps[k][:n] = 0.0
+    sim._run(Stage.STATE)
+    soil = _soil(sim)
+    ids = ps["id"][soil]
+    order = np.argsort(probe.ids0)
+    pos = np.searchsorted(probe.ids0[order], ids)
+    pos = order[np.clip(pos, 0, len(order) - 1)]
+    x0, d0 = probe.x0[pos], probe.depth0[pos]
+    k_row = np.round((d0 - 0.5 * probe.dx) / probe.dx).astype(int)
+    bed = (ps["suspended"][soil] == 0) if "suspended" in ps else np.ones(len(soil), bool)
+    rho = ps["rho"][soil]
+    groups = []
+    for zone, (lo, hi) in BUDGET_ZONES.items():
+        for k in range(8):
+            sel = bed & (x0[:, 0] > lo) & (x0[:, 0] < hi) & (k_row == k)
+            if sel.any():
+                groups.append((zone, k, sel))
+
+    def add(term, acc):
+        f = acc[soil] * rho[:, None]
+        for zone, k, sel in groups:
+            e = sums.setdefault((term, zone, k), [0.0, 0.0, 0])
+            e[0] += float(f[sel, 0].sum())
+            e[1] += float(f[sel, 1].sum())
+            e[2] += int(sel.sum())
+
+    prev = ps["acc"][:n].copy()
+    for item in sim.plan.schedule.get(Stage.RATES, ()):
+        sim.refresh(item.refresh)
+        item.term.run(sim.ctx)
+        now = ps["acc"][:n]
+        if item.term.name == "soil rates" and item.term.av_alpha is not None:
+            with_av = now - prev
+            keep = ps["acc"][:n].copy()
+            ps["acc"][:n] = 0.0
+            alpha, beta = item.term.av_alpha, item.term.av_beta
+            item.term.av_alpha = item.term.av_beta = None
+            item.term.run(sim.ctx)
+            item.term.av_alpha, item.term.av_beta = alpha, beta
+            stress = ps["acc"][:n].copy()
+            add("soil stress", stress)
+            add("soil AV", with_av - stress)
+            ps["acc"][:n] = keep
+        else:
+            add(item.term.name, now - prev)
+        prev = ps["acc"][:n].copy()
+    add("total", ps["acc"][:n])
+    for k, v in saved.items():
+        ps[k][...] = v
+
+
+def budget_run(dx, end=0.1, window=(0.03, 0.1), every=1.0e-3, sets=(), tag="budget", out=RESULTS):
+    """force_budget averaged over `window` every `every` s; a scene without pick-up (the sand's
+    critical Shields number raised). Writes <tag>_dx<dx>mm_budget.json."""
+    from solver.simulation import Simulation
+
+    sets = list(sets) + ["materials.sand.critical_shields=10.0"]
+    sim = Simulation(scene(dx, end, sets))
+    probe = Probe(sim)
+    sums = {}
+    times = list(np.round(np.arange(window[0], window[1] + 1e-9, every), 9))
+    _, wall, cpu = sc.run_timed(sim, times, lambda s: force_budget(s, probe, sums))
+    table = {f"{t}|{z}|{k}": [v[0] / v[2], v[1] / v[2]] for (t, z, k), v in sums.items()}
+    res = {"dx": dx, "window": window, "sets": sets, "cpu_s": cpu, "wall_s": wall, "mean_force": table}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{tag}_dx{dx * 1000:g}mm_budget.json").write_text(json.dumps(res, indent=1) + "\n")
+    return res
+
+
 def load(out=RESULTS):
     return [json.loads(p.read_text()) for p in sorted(out.glob("*.json"))]
 
@@ -433,10 +568,19 @@ def main(argv=None):
     r.add_argument("--set", action="append", default=[])
     r.add_argument("--tag", default="base")
     r.add_argument("--every", type=float, default=0.05)
+    b = sub.add_parser("budget")
+    b.add_argument("--dx", type=float, default=0.005)
+    b.add_argument("--set", action="append", default=[])
+    b.add_argument("--tag", default="budget")
     sub.add_parser("table")
+    sub.add_parser("check")
     a = ap.parse_args(argv)
     if a.cmd == "run":
         run(a.dx, a.end, a.set, a.tag, a.every)
+    elif a.cmd == "budget":
+        budget_run(a.dx, sets=a.set, tag=a.tag)
+    elif a.cmd == "check":
+        print(check_table())
     else:
         print(table(load()))
     return 0
