@@ -49,10 +49,18 @@ def test_the_convergence_verdict_reads_the_differences_to_the_finest_spacing():
     cases = [_fake_case("saturated", 0.005, 1.08), _fake_case("saturated", 0.0035, 0.97)]
     cases += [_fake_case("saturated", 0.0025, 1.0)]
     rows = sp.convergence_rows(cases)
-    assert [r["t"] for r in rows] == list(sp.COMPARE_TIMES)
+    assert [r["t"] for r in rows] == list(sp.CONVERGENCE_TIMES)
     for r in rows:
+        assert r["ref"] == sp.DX_FINE
         assert r[f"rel_{sp.DX}"] == pytest.approx(0.08) and r[f"rel_{sp.DX_MID}"] == pytest.approx(-0.03)
-    assert not sp.convergence_rows(cases[:2])  # no 2.5 mm run: nothing to compare against
+    # no 2.5 mm run: 5 mm is read against 3.5 mm, and the table says the row is no three-spacing test
+    rows = sp.convergence_rows(cases[:2])
+    assert [r["t"] for r in rows] == list(sp.CONVERGENCE_TIMES)
+    for r in rows:
+        assert r["ref"] == sp.DX_MID and r[f"rel_{sp.DX}"] == pytest.approx((1.08 - 0.97) / 0.97)
+    lines = "\n".join(sp._convergence_section(rows))
+    assert "not reached" in lines and "(5 vs 3.5 mm only)" in lines
+    assert not sp.convergence_rows(cases[:1])  # one spacing: nothing to compare against
 
 
 @pytest.mark.slow
