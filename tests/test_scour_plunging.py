@@ -86,3 +86,17 @@ def test_a_coarse_plunging_run_erodes_and_carries_the_sand_away(tmp_path):
     moved = sand & (last["suspended"] == 1)
     assert moved.sum() > 0
     assert np.mean(last["velocity"][moved, 0]) > 0  # carried downstream, away from the jet
+
+
+def test_a_model_variant_gets_its_own_convergence_table():
+    """Runs with scene overrides (a variant) are read on their own: their rows name the variant and
+    compare its spacings with each other, never with the base model's."""
+    sets = ("materials.sand.dilatancy_angle=10.0",)
+    cases = []
+    for dx, scale in ((0.005, 1.05), (0.0035, 0.98), (0.0025, 1.0)):
+        c = _fake_case("saturated", dx, scale) | {"sets": list(sets), "case": f"v_{dx}", "x_nappe": [0.2]}
+        c |= {"d": c["d_nappe"], "steps": 1, "particles_end": 1, "cpu_s": 1.0, "wall_s": 1.0}
+        cases.append(c)
+    text = "\n".join(sp._variant_section(sets, cases))
+    assert "## Variant: `materials.sand.dilatancy_angle=10.0`" in text
+    assert "+5.0 %" in text and "-2.0 %" in text and "| no |" not in text

@@ -159,6 +159,15 @@ def _convergence_section(conv):
     return lines
 
 
+def _variant_section(sets, cases):
+    """A model variant's runs and convergence (the base study's tables, its cases only)."""
+    lines = ["", "## Variant: " + ", ".join(f"`{x}`" for x in sets), ""]
+    lines += _runs_section(cases)[2:]
+    conv = convergence_rows(cases)
+    lines += _convergence_section(conv)[2:] if conv else ["", "(one spacing so far: nothing to compare)"]
+    return lines
+
+
 def _sweep_section(cases, pred):
     """d_jet against q at 5 mm, its exponent, and the formulas' exponents and equilibrium depths."""
     lines = [
@@ -208,7 +217,12 @@ def report(out=RESULTS):
 
     from verification.analytic.scour_formulas import SAND, predictions
 
-    cases = [c for c in load_cases() if not c["sets"] and c["ranks"] == 1]
+    every = load_cases()
+    cases = [c for c in every if not c["sets"] and c["ranks"] == 1]
+    variants = {}  # the same q = CONVERGENCE_Q study with scene overrides (a model variant), per override set
+    for c in every:
+        if c["sets"] and c["ranks"] == 1:
+            variants.setdefault(tuple(c["sets"]), []).append(c)
     if not cases:
         print("no runs yet: python -m verification.scour_plunging run-all", file=sys.stderr)
         return 1
@@ -227,6 +241,8 @@ def report(out=RESULTS):
         "",
     ]
     lines += _runs_section(cases) + _convergence_section(conv) + _sweep_section(cases, pred)
+    for sets, vcases in sorted(variants.items()):
+        lines += _variant_section(sets, vcases)
     (out / "scour_plunging.md").write_text("\n".join(lines) + "\n")
     with open(out / "convergence.csv", "w", newline="") as fh:
         w = csv.writer(fh)
