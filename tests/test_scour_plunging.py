@@ -100,3 +100,13 @@ def test_a_model_variant_gets_its_own_convergence_table():
     text = "\n".join(sp._variant_section(sets, cases))
     assert "## Variant: `materials.sand.dilatancy_angle=10.0`" in text
     assert "+5.0 %" in text and "-2.0 %" in text and "| no |" not in text
+
+
+def test_the_curve_difference_is_the_mean_gap_over_the_mean_depth():
+    """d = s * 0.03 sqrt(t) at each spacing: the mean |d(5 mm) - d(2.5 mm)| / mean d(2.5 mm) is
+    |s - 1| exactly, and so is the largest pointwise difference."""
+    cases = [_fake_case("dry", 0.005, 1.08), _fake_case("dry", 0.0035, 0.97), _fake_case("dry", 0.0025, 1.0)]
+    (row,) = sp.curve_differences(cases)
+    assert row["end"] == pytest.approx(1.0)
+    assert row[sp.DX] == pytest.approx((0.08, 0.08)) and row[sp.DX_MID] == pytest.approx((0.03, 0.03))
+    assert "| dry | 1 | 8.0 % (8.0 %) | 3.0 % (3.0 %) | yes |" in "\n".join(sp._curve_section([row]))
