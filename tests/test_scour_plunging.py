@@ -49,10 +49,18 @@ def test_the_convergence_verdict_reads_the_differences_to_the_finest_spacing():
     cases = [_fake_case("saturated", 0.005, 1.08), _fake_case("saturated", 0.0035, 0.97)]
     cases += [_fake_case("saturated", 0.0025, 1.0)]
     rows = sp.convergence_rows(cases)
-    assert [r["t"] for r in rows] == list(sp.COMPARE_TIMES)
+    assert [r["t"] for r in rows] == list(sp.CONVERGENCE_TIMES)
     for r in rows:
+        assert r["ref"] == sp.DX_FINE
         assert r[f"rel_{sp.DX}"] == pytest.approx(0.08) and r[f"rel_{sp.DX_MID}"] == pytest.approx(-0.03)
-    assert not sp.convergence_rows(cases[:2])  # no 2.5 mm run: nothing to compare against
+    # no 2.5 mm run: 5 mm is read against 3.5 mm, and the table says the row is no three-spacing test
+    rows = sp.convergence_rows(cases[:2])
+    assert [r["t"] for r in rows] == list(sp.CONVERGENCE_TIMES)
+    for r in rows:
+        assert r["ref"] == sp.DX_MID and r[f"rel_{sp.DX}"] == pytest.approx((1.08 - 0.97) / 0.97)
+    lines = "\n".join(sp._convergence_section(rows))
+    assert "not reached" in lines and "(5 vs 3.5 mm only)" in lines
+    assert not sp.convergence_rows(cases[:1])  # one spacing: nothing to compare against
 
 
 @pytest.mark.slow
@@ -78,3 +86,27 @@ def test_a_coarse_plunging_run_erodes_and_carries_the_sand_away(tmp_path):
     moved = sand & (last["suspended"] == 1)
     assert moved.sum() > 0
     assert np.mean(last["velocity"][moved, 0]) > 0  # carried downstream, away from the jet
+
+
+def test_a_model_variant_gets_its_own_convergence_table():
+    """Runs with scene overrides (a variant) are read on their own: their rows name the variant and
+    compare its spacings with each other, never with the base model's."""
+    sets = ("materials.sand.dilatancy_angle=10.0",)
+    cases = []
+    for dx, scale in ((0.005, 1.05), (0.0035, 0.98), (0.0025, 1.0)):
+        c = _fake_case("saturated", dx, scale) | {"sets": list(sets), "case": f"v_{dx}", "x_nappe": [0.2]}
+        c |= {"d": c["d_nappe"], "steps": 1, "particles_end": 1, "cpu_s": 1.0, "wall_s": 1.0}
+        cases.append(c)
+    text = "\n".join(sp._variant_section(sets, cases))
+    assert "## Variant: `materials.sand.dilatancy_angle=10.0`" in text
+    assert "+5.0 %" in text and "-2.0 %" in text and "| no |" not in text
+
+
+def test_the_curve_difference_is_the_mean_gap_over_the_mean_depth():
+    """d = s * 0.03 sqrt(t) at each spacing: the mean |d(5 mm) - d(2.5 mm)| / mean d(2.5 mm) is
+    |s - 1| exactly, and so is the largest pointwise difference."""
+    cases = [_fake_case("dry", 0.005, 1.08), _fake_case("dry", 0.0035, 0.97), _fake_case("dry", 0.0025, 1.0)]
+    (row,) = sp.curve_differences(cases)
+    assert row["end"] == pytest.approx(1.0)
+    assert row[sp.DX] == pytest.approx((0.08, 0.08)) and row[sp.DX_MID] == pytest.approx((0.03, 0.03))
+    assert "| dry | 1 | 8.0 % (8.0 %) | 3.0 % (3.0 %) | yes |" in "\n".join(sp._curve_section([row]))
