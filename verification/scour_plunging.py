@@ -38,6 +38,7 @@ from verification.scour_study import (
     SETUPS,
     SOILS,
     depth_at,
+    is_base,
     load_case,
     q_exponent_fit,
     run_all,
@@ -266,7 +267,7 @@ def report(out=RESULTS):
     from verification.analytic.scour_formulas import SAND, predictions
 
     every = load_cases()
-    cases = [c for c in every if not c["sets"] and c["ranks"] == 1]
+    cases = [c for c in every if is_base(c)]
     variants = {}  # the same q = CONVERGENCE_Q study with scene overrides (a model variant), per override set
     for c in every:
         if c["sets"] and c["ranks"] == 1:
