@@ -51,6 +51,22 @@ class SoilConstants:
     friction_increment: np.ndarray
     inertial_number_i0: np.ndarray
     grain_inertia: np.ndarray
+    # a sand with a state (solver/sand_state.py, solver/physics/sand_state.py; zeros: constant phi and psi):
+    # e0, e_min, e_max, the critical line's e_Gamma, lambda_c, xi, p_a, Bolton's Q, and phi_cv (degrees)
+    state_e0: np.ndarray
+    state_e_min: np.ndarray
+    state_e_max: np.ndarray
+    state_e_gamma: np.ndarray
+    state_lambda: np.ndarray
+    state_xi: np.ndarray
+    state_p_a: np.ndarray
+    state_q: np.ndarray
+    phi_cv: np.ndarray
+
+    @property
+    def has_state(self):
+        """True if any soil is a sand with a state (then its state sets its cone)."""
+        return bool(np.any(self.state_e_max > 0.0))
 
     @property
     def rate_dependent(self):
@@ -64,6 +80,8 @@ def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
         for k in (
             "bulk", "shear", "tan_phi", "cohesion", "alpha_phi", "k_c", "alpha_psi",
             "friction_increment", "inertial_number_i0", "grain_inertia",
+            "state_e0", "state_e_min", "state_e_max", "state_e_gamma", "state_lambda", "state_xi",
+            "state_p_a", "state_q", "phi_cv",
         )
     }  # fmt: skip
     model = np.zeros(len(names), dtype=np.int32)
@@ -87,6 +105,17 @@ def build_soil_constants(scene: Scene, names) -> SoilConstants | None:
             cols["friction_increment"][k] = mat.friction_increment
             cols["inertial_number_i0"][k] = mat.inertial_number_i0
             cols["grain_inertia"][k] = mat.grain_size * np.sqrt(mat.grain_density)
+        if mat.state is not None and scene.numerics.sand_state == "material":
+            st = mat.state
+            cols["state_e0"][k] = st.void_ratio
+            cols["state_e_min"][k] = st.min_void_ratio
+            cols["state_e_max"][k] = st.max_void_ratio
+            cols["state_e_gamma"][k] = st.critical_void_ratio
+            cols["state_lambda"][k] = st.critical_lambda
+            cols["state_xi"][k] = st.critical_xi
+            cols["state_p_a"][k] = st.reference_pressure
+            cols["state_q"][k] = st.bolton_q
+            cols["phi_cv"][k] = mat.friction_angle
     return SoilConstants(yield_model=model, **cols) if any_soil else None
 
 

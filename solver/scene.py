@@ -33,6 +33,7 @@ from pydantic import (
 )
 
 from .errors import SceneError
+from .sand_state import SandState
 from .scene_open import (
     Body,
     Inlet,
@@ -181,6 +182,11 @@ class Soil(Strict):
     rheology: Literal["perfectly_plastic", "mu_I"] = "perfectly_plastic"
     friction_increment: NonNegative = 0.26  # mu_2 - mu_s (defaults.toml: Jop et al. 2005)
     inertial_number_i0: Positive = 0.279  # I_0 (defaults.toml: Jop et al. 2005)
+    # a sand with a state (solver/sand_state.py, docs/sand.md): void ratio, critical-state line, Bolton's
+    # state-dependent peak friction and dilatancy; friction_angle is then the critical-state angle phi_cv.
+    # None: the seed's constant friction and dilatancy. numerics.sand_state = "none" (the seed's scheme)
+    # overrides it
+    state: SandState | None = None
 
     @property
     def grain_density(self):
@@ -304,6 +310,7 @@ SCHEMES = {
         "wall_repulsion": False,
         "erosion": "none",
         "rheology": "perfectly_plastic",
+        "sand_state": "none",
     },
 }
 """What each numerics.scheme sets. Precedence: defaults.toml < the preset < the scene's own keys."""
@@ -361,6 +368,9 @@ class Numerics(Strict):
     # the yielded soil's rheology: "material" (each soil's own `rheology`) or "perfectly_plastic" (every soil
     # elastic-perfectly plastic, the seed's eq. 16 / Bui et al. 2008, whatever its `rheology` says)
     rheology: Literal["material", "perfectly_plastic"] = "material"
+    # a sand's state: "material" (each soil's own `state`, solver/sand_state.py) or "none" (every soil with
+    # its constant friction_angle and dilatancy_angle, the seed's, whatever its `state` says)
+    sand_state: Literal["material", "none"] = "material"
 
 
 class Output(Strict):
@@ -575,6 +585,7 @@ def _check_consistency(s: Scene):
         raise _Inconsistent("output.times", "every output time must lie in [0, end_time]")
     _check_seepage(s)
     _check_rheology(s)
+    _check_sand_state(s)
     for key, reason in check_open_boundaries(s):
         raise _Inconsistent(key, reason)
     _check_resources(s)
@@ -616,6 +627,52 @@ def _check_rheology(s: Scene):
                 f"materials.{name}.rheology",
                 "'mu_I' raises the yield surface of a yielding soil, and yield_model = 'elastic' has none",
             )
+
+
+def _check_sand_state(s: Scene):
+    """A sand with a state yields by Mohr-Coulomb in the plane of a 2D flow at the friction and dilatancy its
+    state sets (docs/sand.md); its void ratio and its porosity, where both are given, are one property."""
+    for name, mat in s.materials.items():
+        if not isinstance(mat, Soil) or mat.state is None:
+            continue
+        if mat.yield_model != "mohr_coulomb":
+            raise _Inconsistent(
+                f"materials.{name}.yield_model",
+                f"must be 'mohr_coulomb' for a sand with a state (got '{mat.yield_model}'): the state sets "
+                "the friction and the dilatancy of a plane-strain Mohr-Coulomb return "
+                "(solver/physics/sand_state.py)",
+            )
+        if s.dim != 2:
+            raise _Inconsistent(
+                f"materials.{name}.state",
+                "a sand with a state is plane strain (its return is Mohr-Coulomb in the plane of the flow): "
+                "scene.dimension must be 2",
+            )
+        if mat.rheology != "perfectly_plastic":
+            raise _Inconsistent(
+                f"materials.{name}.rheology",
+                "a sand with a state sets its own friction (Bolton 1986); mu(I) is not combined with it",
+            )
+        if mat.friction_angle <= 5.0 * 4.0:  # Bolton's 5 I_R at the index's clip of -4
+            raise _Inconsistent(
+                f"materials.{name}.friction_angle",
+                f"{mat.friction_angle:g} degrees: a sand with a state takes it as the critical-state angle, "
+                "and its loosest state mobilises phi_cv - 20 degrees (Bolton 1986, 5 I_R at I_R = -4): give "
+                "more than 20 (quartz sands about 33, Bolton 1986)",
+            )
+        if mat.dilatancy_angle != 0.0:
+            raise _Inconsistent(
+                f"materials.{name}.dilatancy_angle",
+                "the state sets the dilatancy of a sand with a state (Bolton 1986): leave it out",
+            )
+        if mat.porosity is not None:
+            e_n = mat.porosity / (1.0 - mat.porosity)
+            if abs(e_n - mat.state.void_ratio) > 1e-3 * e_n:  # both written to three or more digits
+                raise _Inconsistent(
+                    f"materials.{name}.state.void_ratio",
+                    f"{mat.state.void_ratio:g} is not the porosity's n / (1 - n) = {e_n:.4g}: the void ratio "
+                    "and the porosity are one property",
+                )
 
 
 def _check_seepage(s: Scene):

@@ -32,6 +32,7 @@ CASES = {
     "granular_incline": "verification.granular_incline",  # issue 24 item 1, mu(I) Bagnold profile
     "jet_scour": "verification.jet_scour",  # issue 24 item 3, plane jet scour depth against time
     "mobile_bed_dam_break": "verification.mobile_bed_dam_break",  # issue 24 item 3, Spinewine & Zech set-up
+    "sand_element": "verification.sand_element",  # issue 31 item 3, a sand with a state at a material point
 }
 # Cases only the nightly report runs (after CASES): `scoursph verify all` and `make verify` leave them out
 NIGHTLY_CASES = {

@@ -26,6 +26,7 @@ from ..particles import FieldSpec, Mirror
 from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .sand_state import plane_strain_return, relative_dilatancy_index, state_angles, state_constants
 from .shields_pickup import erosion_materials
 from .soil_rates import SHEAR_RATE  # the field SoilRates writes for mu(I) soils
 
@@ -153,6 +154,7 @@ def soil_stress_state(
     update_history=False,
     suspended=None,
     rate=None,
+    state=None,
 ):
     """For each row: p from eq. (17) (with the stored plastic dilation, if any), then the
     return mapping; writes p to mean_stress and the admissible s in place. With
@@ -171,7 +173,10 @@ def soil_stress_state(
     suspended (erosion, solver/physics/shields_pickup.py; None without): soil the flow has picked up
     has no shear strength, s = 0, and keeps p.
     rate (mu(I), None without: the perfectly plastic return of the seed): the tuple (friction_increment,
-    inertial_number_i0, grain_inertia) per material and the shear rate per row (SoilRates)."""
+    inertial_number_i0, grain_inertia) per material and the shear rate per row (SoilRates).
+    state (a sand with a state, None without: the constant cone of the material): the per-material
+    constants of solver/physics/sand_state.py; the cone follows the void ratio (1 + e0) exp(eps_vp) - 1
+    (the grains' rearrangement, not the elastic strain of a skeleton softer than sand) and the trial p'."""
     for t in prange(rows.shape[0]):
         i = rows[t]
         m = material[i]
@@ -181,27 +186,23 @@ def soil_stress_state(
         d_mu, i0, inertia, rate_i = 0.0, 1.0, 0.0, 0.0
         if rate is not None and (suspended is None or suspended[i] == 0):  # suspended soil: no rheology
             d_mu, i0, inertia, rate_i = rate[0][m], rate[1][m], rate[2][m], rate[3][i]
-        p, a0, a1, a2, a3, a4, a5, dvol, dcrack = return_map(
-            bulk[m] * e,
-            s[i, 0],
-            s[i, 1],
-            s[i, 2],
-            s[i, 3],
-            s[i, 4],
-            s[i, 5],
-            yield_model[m],
-            bulk[m],
-            shear[m],
-            tan_phi[m],
-            cohesion[m],
-            alpha_phi[m],
-            k_c[m],
-            alpha_psi[m],
-            d_mu,
-            i0,
-            inertia,
-            rate_i,
-        )
+        if state is not None and eps_vp is not None and state[2][m] > 0.0:  # e_max > 0: a sand with a state
+            void = (1.0 + state[0][m]) * np.exp(eps_vp[i]) - 1.0  # de / (1 + e) = d eps_vp (docs/sand.md)
+            i_r = relative_dilatancy_index(
+                void, bulk[m] * e, state[1][m], state[2][m], state[3][m], state[4][m], state[5][m],
+                state[6][m], state[7][m],
+            )  # fmt: skip
+            sin_phi, sin_psi = state_angles(i_r, state[8][m])
+            p, a0, a1, a2, a3, a4, a5, dvol, dcrack = plane_strain_return(
+                bulk[m] * e, s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], sin_phi, sin_psi,
+                cohesion[m], bulk[m], shear[m],
+            )  # fmt: skip
+        else:
+            p, a0, a1, a2, a3, a4, a5, dvol, dcrack = return_map(
+                bulk[m] * e, s[i, 0], s[i, 1], s[i, 2], s[i, 3], s[i, 4], s[i, 5], yield_model[m], bulk[m],
+                shear[m], tan_phi[m], cohesion[m], alpha_phi[m], k_c[m], alpha_psi[m], d_mu, i0, inertia,
+                rate_i,
+            )  # fmt: skip
         mean_stress[i] = p
         if suspended is not None and suspended[i] != 0:
             a0 = a1 = a2 = a3 = a4 = a5 = 0.0
@@ -264,6 +265,7 @@ class Constitution:
         self.plastic = any(s.yield_model[k] != YieldModel.ELASTIC for k in soil)
         self.rate_dependent = s.rate_dependent  # mu(I): the shear rate of SoilRates raises the surface
         self.rate_constants = (s.friction_increment, s.inertial_number_i0, s.grain_inertia)
+        self.state = state_constants(s)  # a sand with a state: its cone follows e and p' (None: constant)
 
     def apply(self, ctx, rho, stress, update_history):
         """p from rho (eq. 17) and the return mapping of `stress`, in place."""
@@ -281,6 +283,7 @@ class Constitution:
             update_history,
             ps["suspended"] if self.erodes else None,
             rate,
+            self.state,
         )
 
 
@@ -291,6 +294,18 @@ def mu_i_equations(constitution):
         Equation(
             "mu(I) once yielded: sqrt(J2) <= static + (mu_2 - mu_s) I / (I + I_0) p",
             "Jop, Forterre & Pouliquen (2006); GDR MiDi (2004)",
+        ),
+    )
+
+
+def state_equations(constitution):
+    if constitution.state is None:
+        return ()
+    return (
+        Equation(
+            "a sand's state: critical line e_c(p'), I_R = (e_c - e)(Q - ln p') / (e_max - e_min), "
+            "phi = phi_cv + 5 I_R, psi = 5 I_R / 0.8 (docs/sand.md)",
+            "Li & Wang (1998); Been & Jefferies (1985); Bolton (1986)",
         ),
     )
 
@@ -331,9 +346,13 @@ class SoilStressState(Term):
             scene.numerics.cfl.sound * scene.h / c_max,
         )
         self.equations = (
-            Equation("mean stress", "seed eq. (17)"),
-            Equation("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager"),
-        ) + mu_i_equations(self.constitution)
+            (
+                Equation("mean stress", "seed eq. (17)"),
+                Equation("return mapping", "seed eq. (16) Mohr-Coulomb / Bui et al. (2008) Drucker-Prager"),
+            )
+            + mu_i_equations(self.constitution)
+            + state_equations(self.constitution)
+        )
 
     def explain(self):
         return mu_i_lines(self.constitution, self.names)
@@ -365,8 +384,10 @@ class SoilReturnMapping(Term):
             ("eps_vp", "rho_half") if self.constitution.plastic else ()
         )
         self.equations = (
-            Equation("return mapping of s at n+1/2", "seed eqs. (16), (27); Bui et al. (2008)"),
-        ) + mu_i_equations(self.constitution)
+            (Equation("return mapping of s at n+1/2", "seed eqs. (16), (27); Bui et al. (2008)"),)
+            + mu_i_equations(self.constitution)
+            + state_equations(self.constitution)
+        )
 
     def run(self, ctx):
         self.constitution.apply(ctx, "rho_half", "stress_dev_half", True)
