@@ -90,3 +90,137 @@ def test_constant_sand_fails_the_element_tests():
     failing = [m for m, c in checks.items() if not c.passed]
     for part in ("peak phi - Bolton", "dense dilates", "dense peaks", "loose contracts", "liquefied"):
         assert any(part in m or part in checks[m].source for m in failing), (part, failing)
+
+
+# ---- in the solver: a column of sand with a state ---------------------------------------------------
+
+
+def sand_column(state=None, numerics=None, **bars):
+    from verification.column_collapse import scene_at
+
+    sand = {"friction_angle": 33.0, "yield_model": "mohr_coulomb", "dilatancy_angle": 0.0, **bars}
+    if state is not None:
+        sand["state"] = state
+    # the default scheme: the column's own (column_collapse.SCHEME) is the seed's, which turns the state off
+    return scene_at(
+        0.01, 0.05, {"materials": {"bars": sand}, "numerics": {"scheme": "default", **(numerics or {})}}
+    )
+
+
+def final_state(scene):
+    from solver.simulation import Simulation
+
+    sim = Simulation(scene)
+    sim.advance_to(scene.scene.end_time)
+    sim.current_state()
+    ps = sim.particles
+    order = np.argsort(ps["id"][: ps.n_owned])
+    return ps["x"][order].copy(), ps["eps_vp"][order].copy()
+
+
+def test_column_of_dense_and_loose_sand():
+    """The collapsing column in the solver: the dense sand dilates where it yields, the loose one contracts;
+    the plan names Bolton's relations; numerics.sand_state = "none" (the seed's scheme) is the constant sand
+    bit for bit."""
+    from solver.plan import build_plan, explain
+
+    dense, loose = sand_column({"void_ratio": 0.65}), sand_column({"void_ratio": 0.95})
+    assert "Bolton (1986)" in explain(build_plan(dense), dense)
+    _, eps_dense = final_state(dense)
+    _, eps_loose = final_state(loose)
+    assert eps_dense.max() > 1e-3 and eps_dense.min() >= 0.0  # I_R > 0 at every p' of a dense column
+    assert eps_loose.min() < -1e-3
+    switched = final_state(sand_column({"void_ratio": 0.65}, numerics={"sand_state": "none"}))
+    constant = final_state(sand_column())
+    assert "Bolton" not in explain(build_plan(sand_column()), sand_column())
+    np.testing.assert_array_equal(switched[0], constant[0])
+
+
+# ---- bad material input -----------------------------------------------------------------------------
+
+SAND_SCENE = """
+[scene]
+name = "sand"
+dimension = 2
+spacing = 0.01
+end_time = 0.01
+gravity = [0.0, -9.81]
+
+[domain]
+min = [0.0, 0.0]
+max = [0.2, 0.2]
+
+[walls]
+y_min = "no_slip"
+
+[materials.sand]
+model = "soil"
+density = 1640.0
+youngs_modulus = 2.0e7
+poisson_ratio = 0.3
+friction_angle = 33.0
+cohesion = 0.0
+yield_model = "{yield_model}"
+grain_size = {grain_size}
+
+[materials.sand.state]
+void_ratio = {void_ratio}
+critical_lambda = {lam}
+
+[[blocks]]
+name = "layer"
+material = "sand"
+shape = "rectangle"
+min = [0.0, 0.0]
+max = [0.1, 0.1]
+"""
+GOOD = dict(yield_model="mohr_coulomb", grain_size=5e-4, void_ratio=0.616, lam=0.019)
+BAD = {
+    "void ratio below e_min": (
+        dict(void_ratio=0.47),
+        "materials.sand.state",
+        "outside the sand's e_min-e_max",
+    ),
+    "void ratio above e_max": (
+        dict(void_ratio=1.08),
+        "materials.sand.state",
+        "outside the sand's e_min-e_max",
+    ),
+    "negative grain size": (dict(grain_size=-5e-4), "materials.sand.grain_size", "greater than 0"),
+    "critical line crosses zero": (dict(lam=0.2), "materials.sand.state", "crosses zero below the crushing"),
+    "drucker-prager": (
+        dict(yield_model="drucker_prager"),
+        "materials.sand.yield_model",
+        "must be 'mohr_coulomb'",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_sand_is_refused_with_file_key_reason(tmp_path, case):
+    from solver.scene import SceneError, load_scene
+
+    change, key, reason = BAD[case]
+    path = tmp_path / "sand.toml"
+    path.write_text(SAND_SCENE.format(**{**GOOD, **change}))
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert err.value.key == key and reason in err.value.reason and str(path) in str(err.value)
+
+
+def test_good_sand_loads_and_bad_one_exits_2(tmp_path):
+    import subprocess
+
+    from conftest import ENV, SCOURSPH
+
+    from solver.scene import load_scene
+
+    path = tmp_path / "sand.toml"
+    path.write_text(SAND_SCENE.format(**GOOD))
+    assert load_scene(path).materials["sand"].state.void_ratio == 0.616
+    path.write_text(SAND_SCENE.format(**{**GOOD, "void_ratio": 0.47}))
+    out = tmp_path / "out"
+    proc = subprocess.run([*SCOURSPH, "run", str(path), "--out", str(out), "--quiet"], capture_output=True,
+                          text=True, env=ENV, cwd=tmp_path)  # fmt: skip
+    assert proc.returncode == 2 and "materials.sand.state" in proc.stderr and str(path) in proc.stderr
+    assert not out.exists()
