@@ -39,6 +39,8 @@ COARSE = {
     "scour_saturated": 0.01,
     "scour_plunging_dry": 0.01,  # as the seed's scour scenes: 0.6 x 0.095 m of soil at 2 dx of the seed
     "scour_plunging_saturated": 0.01,
+    "scour_plunging_seed_sand_dry": 0.01,  # issue 24's scenes, the seed's sand
+    "scour_plunging_seed_sand_saturated": 0.01,
 }
 END = 0.002
 SCENES = shipped_scenes()

@@ -14,8 +14,16 @@ from verification.analytic.scour_formulas import critical_depth, rand_1955_drop
 
 def test_the_plunging_cases_are_the_shipped_scenes_with_q_dx_and_end_changed():
     raw = st.scene_raw("saturated", 0.08, 0.0025, 0.5, setup="plunging")
-    assert raw["scene"]["name"] == "plunging_saturated_q0.08_dx2.5mm"
-    assert st.case_name("dry", 0.11, 0.005, setup="plunging") == "plunging_dry_q0.11_dx5mm"
+    assert raw["scene"]["name"] == "plunging_state_saturated_q0.08_dx2.5mm"
+    assert st.case_name("dry", 0.11, 0.005, setup="plunging") == "plunging_state_dry_q0.11_dx5mm"
+    # issue 24's runs keep their names under the seed's sand, whose scenes differ only in the sand
+    assert st.case_name("dry", 0.11, 0.005, setup="plunging_seed_sand") == "plunging_dry_q0.11_dx5mm"
+    seed = st.scene_raw("saturated", 0.08, 0.0025, 0.5, setup="plunging_seed_sand")
+    assert seed["materials"]["sand"]["density"] == 1800.0 and "state" not in seed["materials"]["sand"]
+    assert raw["materials"]["sand"]["state"]["void_ratio"] == 0.988  # e_max: the seed's loose sand, capped
+    assert {k: v for k, v in seed.items() if k not in ("materials", "scene")} == {
+        k: v for k, v in raw.items() if k not in ("materials", "scene")
+    }
     assert raw["inlets"][0]["discharge"] == 0.08 and raw["scene"]["spacing"] == 0.0025
     scene = parse_scene(raw, st.SETUPS["plunging"].scene_path("saturated"))
     assert scene.materials["sand"].grain_size == 5e-4  # it erodes

@@ -44,8 +44,7 @@ from verification.scour_study import (
     run_all,
 )
 
-SETUP = SETUPS["plunging"]
-RESULTS = SETUP.results
+PLUNGING_SETUPS = ("plunging", "plunging_seed_sand")  # the sand with a state (issue 31) and the seed's sand
 FALL = 0.15  # m, the crown above the soil surface in the scenes (docs/scour_plunging.md)
 DX_MID = 0.0035
 SPACINGS = (DX, DX_MID, DX_FINE)
@@ -66,8 +65,8 @@ def sweep_cases(end=END):
     return [(soil, q, DX, end, None) for q in Q_ALL for soil in SOILS]
 
 
-def load_cases():
-    return [load_case(p) for p in sorted((RESULTS / "cases").glob("*.json"))]
+def load_cases(setup="plunging"):
+    return [load_case(p) for p in sorted((SETUPS[setup].results / "cases").glob("*.json"))]
 
 
 def d_jet(c, t):
@@ -258,7 +257,7 @@ def _sweep_section(cases, pred):
     return lines
 
 
-def report(out=RESULTS):
+def report(out=None, setup="plunging"):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -266,7 +265,9 @@ def report(out=RESULTS):
 
     from verification.analytic.scour_formulas import SAND, predictions
 
-    every = load_cases()
+    results = SETUPS[setup].results
+    out = out or results
+    every = load_cases(setup)
     cases = [c for c in every if is_base(c)]
     variants = {}  # the same q = CONVERGENCE_Q study with scene overrides (a model variant), per override set
     for c in every:
@@ -282,7 +283,7 @@ def report(out=RESULTS):
         "# Plunging scour study: results",
         "",
         "Written by `python -m verification.scour_plunging report` from",
-        "verification/results/scour_plunging/cases/. d_jet: the bed's deepest drop over",
+        f"verification/results/{results.name}/cases/ (set-up '{setup}'). d_jet: the bed's deepest drop over",
         "0.03 m ≤ x ≤ L − 0.10 m (verification/scour_plunging.py); d: the same over the whole layer. CPU:",
         "the run's CPU seconds",
         "(one process, one Numba thread); load: the 1-min load average at its start and end (the 2 cores",
@@ -300,8 +301,8 @@ def report(out=RESULTS):
         for r in conv:
             w.writerow([r["soil"], r["t"], f"{r[DX]:.6g}", f"{r[DX_MID]:.6g}", f"{r['fine']:.6g}"])
     _plot(plt, cases, out / "depth_vs_time.png")
-    _plot_profiles(plt, cases, out / "hole_profiles.png")
-    _plot_snapshots(plt, out / "snapshots.png")
+    _plot_profiles(plt, cases, out / "hole_profiles.png", results)
+    _plot_snapshots(plt, out / "snapshots.png", setup=setup)
     print(f"report in {out}/scour_plunging.md")
     return 0
 
@@ -329,7 +330,7 @@ def _plot(plt, cases, path):
     plt.close(fig)
 
 
-def _plot_profiles(plt, cases, path):
+def _plot_profiles(plt, cases, path, results):
     """The bed surface change z_s(x, t) - z_s(x, 0) at q = CONVERGENCE_Q, each spacing, at COMPARE_TIMES."""
     from verification.scour_zones import read_profiles
 
@@ -337,7 +338,7 @@ def _plot_profiles(plt, cases, path):
     for ax, soil in zip(axs, SOILS):
         at_q = (c for c in cases if c["soil"] == soil and abs(c["q"] - CONVERGENCE_Q) < 1e-9)
         for c, color in zip(sorted(at_q, key=lambda c: -c["dx"]), ("C0", "C1", "C2")):
-            kept = RESULTS / "cases" / f"{c['case']}_profiles.csv"
+            kept = results / "cases" / f"{c['case']}_profiles.csv"
             if not kept.exists():
                 continue
             x, t, z = read_profiles(kept)
@@ -355,7 +356,7 @@ def _plot_profiles(plt, cases, path):
     plt.close(fig)
 
 
-def _plot_snapshots(plt, path, times=COMPARE_TIMES):
+def _plot_snapshots(plt, path, times=COMPARE_TIMES, setup="plunging"):
     """Particles under the jet at `times` for q = CONVERGENCE_Q at each spacing whose HDF5 series is on
     disk (runs/scour_study/): water by speed, bed soil brown, picked-up soil red."""
     from solver.output.hdf5_writer import read_series
@@ -364,7 +365,7 @@ def _plot_snapshots(plt, path, times=COMPARE_TIMES):
     rows = []
     for soil in SOILS:
         for dx in SPACINGS:
-            h5 = RUNS / case_name(soil, CONVERGENCE_Q, dx, setup="plunging") / "particles.h5"
+            h5 = RUNS / case_name(soil, CONVERGENCE_Q, dx, setup=setup) / "particles.h5"
             if h5.exists():
                 rows.append((soil, dx, {round(t, 6): f for t, f in read_series(h5)}))
     if not rows:
@@ -411,7 +412,10 @@ def main(argv=None):
     a.add_argument("--end", type=float, default=END)
     a.add_argument("--jobs", type=int, default=1)
     a.add_argument("--only", choices=("convergence", "sweep"))
-    sub.add_parser("report")
+    r = sub.add_parser("report")
+    for parser in (a, r):
+        parser.add_argument("--setup", choices=PLUNGING_SETUPS, default="plunging",
+                            help="the sand with a state (default) or the seed's sand (issue 24)")  # fmt: skip
     args = ap.parse_args(argv)
     if args.cmd == "run-all":
         todo = []
@@ -419,8 +423,8 @@ def main(argv=None):
             todo += convergence_cases(args.end)
         if args.only in (None, "sweep"):
             todo += [c for c in sweep_cases(args.end) if c not in todo]
-        run_all(todo, jobs=args.jobs, setup="plunging")
-    return report()
+        run_all(todo, jobs=args.jobs, setup=args.setup)
+    return report(setup=args.setup)
 
 
 if __name__ == "__main__":

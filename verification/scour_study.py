@@ -83,8 +83,21 @@ SETUPS = {
     # the seed's set-up (docs/scour_setup.md): the 0.01 m fall, drowned nappe, 0.25 m layer
     "seed": Setup("seed", "scour_{soil}.toml", 0.25, RESULTS, ""),
     # issue 24 item 4: the nappe plunges onto an eroding bed (docs/scour_plunging.md)
+    # issue 31: the same with a sand with a state, the seed's densities (docs/sand.md)
     "plunging": Setup(
-        "plunging", "scour_plunging_{soil}.toml", 0.63, RESULTS.with_name("scour_plunging"), "plunging_"
+        "plunging",
+        "scour_plunging_{soil}.toml",
+        0.63,
+        RESULTS.with_name("scour_plunging_state"),
+        "plunging_state_",
+    ),
+    # issue 24's plunging study, the seed's sand (constant phi, psi = 0, 1800 kg/m^3, n = 0.35): its runs
+    "plunging_seed_sand": Setup(
+        "plunging_seed_sand",
+        "scour_plunging_seed_sand_{soil}.toml",
+        0.63,
+        RESULTS.with_name("scour_plunging"),
+        "plunging_",
     ),
 }
 Q_STUDY = (
