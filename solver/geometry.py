@@ -3,14 +3,17 @@
 All blocks share one lattice, x = domain.min + (i + 1/2) dx, so that blocks tile without
 gaps or overlaps and the first layer sits dx/2 from a wall, where its image particle
 (seed sec. 2.5) lands exactly one spacing away on the mirrored lattice.
+
+The functions read a scene (solver.scene.Scene) and its blocks (RectangleBlock, PolygonBlock) but do
+not import solver/scene.py: a block is told by its shape tag, the discriminator of the scene's Block
+union, so that the scene's checks can count and compare the blocks' lattice points (overlapping_blocks,
+estimated_particles) without an import circle (tests/test_import_graph.py).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from matplotlib.path import Path as PolygonPath
-
-from .scene import PolygonBlock, RectangleBlock, Scene
 
 
 def _lattice(lo, hi, origin, dx):
@@ -24,20 +27,27 @@ def _lattice(lo, hi, origin, dx):
     return np.stack([g.ravel() for g in grids], axis=1)
 
 
-def block_points(block, scene: Scene) -> np.ndarray:
-    """Positions (n, dim) of the particles of one block."""
+def _is_rectangle(block) -> bool:
+    """A RectangleBlock (shape "rectangle") rather than a PolygonBlock (shape "polygon")."""
+    if block.shape == "rectangle":
+        return True
+    assert block.shape == "polygon", block.shape
+    return False
+
+
+def block_points(block, scene) -> np.ndarray:
+    """Positions (n, dim) of the particles of one block of the scene."""
     dx = scene.scene.spacing
     origin = np.asarray(scene.domain.min, dtype=float)
-    if isinstance(block, RectangleBlock):
+    if _is_rectangle(block):
         return _lattice(np.asarray(block.min, float), np.asarray(block.max, float), origin, dx)
-    assert isinstance(block, PolygonBlock)
     verts = np.asarray(block.vertices, float)
     candidates = _lattice(verts.min(axis=0), verts.max(axis=0) + dx, origin, dx)
     inside = PolygonPath(verts).contains_points(candidates, radius=1e-12 * dx)
     return candidates[inside]
 
 
-def clear_of_bodies(points: np.ndarray, scene: Scene) -> np.ndarray:
+def clear_of_bodies(points: np.ndarray, scene) -> np.ndarray:
     """Mask of the points a rigid body leaves free: outside every body and at least dx/2 from its
     edges. A block may overlap a body (a layer laid against an inclined face, a bed around a
     pile), and the body carves it. dx/2 is where the lattice puts the first layer at a box wall,
@@ -60,20 +70,20 @@ def clear_of_bodies(points: np.ndarray, scene: Scene) -> np.ndarray:
 
 def block_top(block) -> float:
     """Highest point of a block: the free surface of a hydrostatic start."""
-    if isinstance(block, RectangleBlock):
+    if _is_rectangle(block):
         return float(block.max[-1])
     return float(np.max(np.asarray(block.vertices)[:, -1]))
 
 
 def block_span(block) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper corners of a block's bounding box."""
-    if isinstance(block, RectangleBlock):
+    if _is_rectangle(block):
         return np.asarray(block.min, float), np.asarray(block.max, float)
     verts = np.asarray(block.vertices, float)
     return verts.min(axis=0), verts.max(axis=0)
 
 
-def estimated_particles(scene: Scene) -> float:
+def estimated_particles(scene) -> float:
     """Particle count from the blocks' extents (an upper bound of the lattice count, cheap:
     computed before any lattice is built, so a far too small spacing is refused at once)."""
     dx = scene.scene.spacing
@@ -90,7 +100,7 @@ def _lattice_index(points, origin, dx):
     return np.rint((points - origin) / dx - 0.5).astype(np.int64)
 
 
-def overlapping_blocks(scene: Scene):
+def overlapping_blocks(scene):
     """((i, j), n): a pair of blocks i < j that put particles at n shared lattice sites, or
     None. Blocks that merely touch share no site: a lattice point belongs to the block whose
     [min, max) holds it."""

@@ -589,7 +589,7 @@ def _check_consistency(s: Scene):
     for key, reason in check_open_boundaries(s):
         raise _Inconsistent(key, reason)
     _check_resources(s)
-    from .geometry import overlapping_blocks  # geometry imports this module
+    from .geometry import overlapping_blocks  # lazy: importing the scene does not import matplotlib
 
     overlap = overlapping_blocks(s)
     if overlap is not None:
@@ -602,7 +602,7 @@ def _check_consistency(s: Scene):
 
 
 def _erodes(s: Scene) -> bool:
-    """Whether the erosion law runs (shields_pickup.erosion_materials, from the scene alone)."""
+    """Whether the erosion law runs (physics/erodible.erosion_materials, from the scene alone)."""
     mats = s.materials.values()
     return (
         s.numerics.erosion == "shields"

@@ -49,7 +49,7 @@ def test_midpoint_quadrature_has_no_secular_drift_for_an_oscillating_pair():
     """Two particles oscillating along their axis: the continuity at the midpoint integrates the
     change of the pair's kernel to second order, so after whole periods the density returns (the
     end-point quadrature of the former symplectic_density drifts by a first-order amount: the
-    bounce model of /work/coord/impact_design.md sec. 1)."""
+    bounce model of the impact design note (not in the repository), sec. 1)."""
     dx, h, dim = 0.01, 0.013, 2
     m = np.array([0.1, 0.1])
     norm = cubic_spline_normalisation(dim, h)

@@ -307,7 +307,7 @@ def test_openfoam_seepage_thick_pile_tiny(tmp_path, tiny_seepage):
 
 
 def test_sheet_pile_closed_form():
-    from verification.analytic.seepage import elliptic_k, sheet_pile_shape_factor
+    from reference_cases.sheet_pile_discharge import elliptic_k, sheet_pile_shape_factor
 
     assert elliptic_k(0.0) == pytest.approx(math.pi / 2)
     assert elliptic_k(math.sqrt(0.5)) == pytest.approx(1.8540746773013719, rel=1e-14)  # A&S table 17.1

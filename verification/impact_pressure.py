@@ -22,7 +22,8 @@ Probe (what a sensor measures):
   * sampling: every time step (dt = 2e-4 s at H/20, 1e-4 s at H/40), interpolated to the sensors'
     20 kHz, then a centred moving average of 1 ms, the same for SPH and experiment. On the measured
     event 5 that filter moves the sensor-1 peak from 3.04 to 3.00 rho g H (1.3 %) and sensors 2-4 by
-    < 2 % (/work/coord/impact_design.md sec. 6); it removes the SPH's single-step acoustic spikes.
+    < 2 % (the impact design note, not in the repository, sec. 6); it removes the SPH's single-step
+    acoustic spikes.
 
 Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
   1. impact time: first t* at which the filtered p* at sensor 2 exceeds 0.5. Experimental range:
@@ -93,13 +94,34 @@ Metrics (p* = p / (rho0 g H), t* = t sqrt(g / H)):
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from pathlib import Path
 
 import numpy as np
 
+# the Lobovsky measurement, shared with the interFoam reference (reference_cases/lobovsky_measurement.py);
+# IMPULSE_WINDOW, PLATEAU and SAMPLE_RATE re-exported: the impact studies and tests read them as ip.<name>
+from reference_cases.lobovsky_measurement import IMPULSE_WINDOW as IMPULSE_WINDOW
+from reference_cases.lobovsky_measurement import PLATEAU as PLATEAU
+from reference_cases.lobovsky_measurement import (
+    RHO0,
+    SENSORS_Y,
+    TIME_SCALE,
+    G,
+    H,
+    acoustic_peak,
+    acoustic_window,
+    band_statistics,
+    experiment,
+    filtered,
+    impact_time,
+    impulse,
+    metrics,
+    openfoam_reference,
+    window_mean_sd,
+)
+from reference_cases.lobovsky_measurement import SAMPLE_RATE as SAMPLE_RATE
 from solver.errors import BlowUpError
 from solver.kernels import kernel_values
 from solver.scene import parse_scene
@@ -111,33 +133,19 @@ from .common import (
     CaseResult,
     Check,
     case_main,
-    read_csv,
-    reference_case_dir,
     richardson,
     save_figure,
     save_study,
     study_row,
 )
 
-H = 0.3
-G = 9.81
-RHO0 = 1000.0
 TANK = (1.61, 0.6)
 COLUMN = (0.6, 0.3)
-SENSORS_Y = (0.003, 0.015, 0.030, 0.080)  # m, sensor centres 1-4 (data README)
 SENSOR_DIAMETER = 0.0042  # m, second-hand (data README)
 FACE_POINTS = 5
-SAMPLE_RATE = 20000.0  # Hz, the sensors'
-FILTER = 1.0e-3  # s, centred moving average applied to SPH and experiment alike
 T_RECORD = 1.8  # t*: the probes are recorded from here (the surge reaches the wall at ~2.4)
 T_END = 5.6  # t*: end of the run (the plateau window ends at 5.5)
-PLATEAU = (3.0, 5.5)
-IMPACT_LEVEL = 0.5
 GATE = 0.4  # t*: gate lift time ~0.07 s (data README), one-sided: the model arrives early
-# t* about the impact time at sensor 2: the first-impact window of the pressure impulse and the acoustic peak
-# (docstring, metric 5): from before the front reaches the lowest sensor to past the model's acoustic period
-# 4H/c0 = 0.28 and the measured impact's duration (~0.45, Froude-scaled from the H = 600 mm medians)
-IMPULSE_WINDOW = (-0.1, 0.5)
 DEFAULT_RESOLUTION = 20  # particles over H
 STUDY_RESOLUTIONS = (20, 40, 80)  # H/80: 12,800 particles, ~19,500 steps: a nightly-size run
 STUDY = RESULTS / "impact_pressure" / "study.csv"
@@ -146,9 +154,6 @@ STUDY_KEYS = (
     "plateau_mean_s1", "plateau_mean_s2", "plateau_sd_s1", "plateau_sd_s2", "plateau_sd_1ms_s2",
     "impulse_s1", "impulse_s2", "impulse_s3", "peak_ac_s1", "peak_ac_s2", "peak_ac_s3",
 )  # fmt: skip
-TIME_SCALE = math.sqrt(H / G)
-# the same tank in 2D with OpenFOAM interFoam (laminar VOF): what the 2D model gives without SPH
-OPENFOAM_CASE = reference_case_dir("openfoam_lobovsky_impact")
 PLATEAU_MEAN = "plateau mean p* at sensor 2, t* 3-5.5, minus the band median"
 PLATEAU_MEAN_2D = "plateau mean p* at sensor 2, t* 3-5.5, minus 2D interFoam with the same free-slip walls"
 IMPULSE_S2 = "first-impact pressure impulse at sensor 2 (int p* dt*, t*_imp -0.1 to +0.5), minus the band's"
@@ -280,71 +285,6 @@ def wall_probe(sim, faces):
     return np.array(out)
 
 
-def acoustic_window(c0):
-    """tau_ac = 4 H / c0 (s): the period of the quarter-wave acoustic mode of a water layer of depth H,
-    the slowest vertical mode of the model's artificially slow sound (docstring)."""
-    return 4.0 * H / c0
-
-
-def filtered(t_star, p_star, width_s=FILTER):
-    """Interpolate to the sensors' 20 kHz and apply a centred moving average of width_s seconds
-    (1 ms: the sensor-scale filter; acoustic_window(c0): the plateau's)."""
-    dt_star = (1.0 / SAMPLE_RATE) / TIME_SCALE
-    grid = np.arange(t_star[0], t_star[-1], dt_star)
-    resampled = np.interp(grid, t_star, p_star)
-    width = max(1, int(round(width_s * SAMPLE_RATE)))
-    kernel = np.ones(width) / width
-    # divided by the kernel's share inside the record: no pull toward 0 at the record's ends
-    inside = np.convolve(np.ones_like(resampled), kernel, mode="same")
-    return grid, np.convolve(resampled, kernel, mode="same") / inside, resampled
-
-
-def impact_time(t_star, p_star):
-    above = np.flatnonzero(p_star > IMPACT_LEVEL)
-    return float(t_star[above[0]]) if len(above) else float("nan")
-
-
-def window_mean_sd(t_star, p_star):
-    w = (t_star >= PLATEAU[0]) & (t_star <= PLATEAU[1])
-    return float(np.mean(p_star[w])), float(np.std(p_star[w]))
-
-
-def experiment():
-    """Event 5 per sensor (t*, p*), the sensor-2 band (t*, lo, median, hi) and Table 2 peaks."""
-    events = []
-    for s in range(1, 5):
-        rows = read_csv(f"lobovsky2014_h300_event5_sensor{s}.csv")
-        events.append(
-            (np.array([float(r["t_star"]) for r in rows]), np.array([float(r["p_star"]) for r in rows]))
-        )
-    rows = read_csv("lobovsky2014_h300_sensor2_percentiles.csv")
-    band = tuple(np.array([float(r[k]) for r in rows]) for k in ("t_star", "p2_5", "median", "p97_5"))
-    rho_g_h_mbar = RHO0 * G * H / 100.0
-    peaks = [
-        {k: float(r[k]) / rho_g_h_mbar for k in ("median_mbar", "p2_5_mbar", "p97_5_mbar")}
-        for r in read_csv("lobovsky2014_h300_peak_statistics.csv")
-    ]
-    return events, band, peaks
-
-
-def openfoam_reference():
-    """{run label: {"cells_per_H", "top", "walls", "t_star", "p_star"[n, 4]}} of every interFoam run the
-    reference case's manifest lists (reference_cases/openfoam_lobovsky_impact). Missing files are an
-    error, never a silently dropped comparison."""
-    manifest = OPENFOAM_CASE / "manifest.json"
-    if not manifest.is_file():
-        raise FileNotFoundError(f"OpenFOAM reference manifest missing: {manifest}")
-    out = {}
-    for label, r in json.loads(manifest.read_text())["runs"].items():
-        path = OPENFOAM_CASE / "data" / Path(r["outputs"]["sensors"]).name
-        if not path.is_file():
-            raise FileNotFoundError(f"OpenFOAM reference data missing (listed in {manifest}): {path}")
-        arr = np.loadtxt(path, delimiter=",", comments="#", skiprows=2)
-        out[label] = {k: r[k] for k in ("cells_per_H", "top", "walls")}
-        out[label].update(t_star=arr[:, 1], p_star=arr[:, 2:6])
-    return out
-
-
 def openfoam_finest(walls="noSlip"):
     """The finest interFoam run with open top and `walls` ("noSlip" or "slip"): (label, run)."""
     runs = {k: r for k, r in openfoam_reference().items() if r["top"] == "open" and r["walls"] == walls}
@@ -376,31 +316,6 @@ def openfoam_plateau_mean(c0, walls="slip"):
             return vals[finest], GCI_SAFETY * abs(vals[finest] - fit[1]), finest
     coarser = sorted(vals)[-2] if len(vals) > 1 else finest
     return vals[finest], abs(vals[finest] - vals[coarser]), finest
-
-
-def band_statistics(band, c0=None):
-    """The sensor-2 band's numbers for the checks. With c0 (the model's sound speed, for the acoustic
-    filter) also the first-impact impulse and acoustic peak of its 2.5 %, median and 97.5 % curves, each
-    with the window at the median curve's impact time. Those are statistics of per-sample percentiles,
-    not percentiles of the repetitions' impulses (not published in the files here): averaging over the
-    window narrows a spread that is independent between samples, so the band's spread bounds the
-    repetitions' from above (a lenient tolerance, stated where it is used)."""
-    t, lo, med, hi = band
-    w = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
-    out = {
-        "impact_earliest": impact_time(t, hi),
-        "impact_latest": impact_time(t, lo),
-        "plateau_median": float(np.mean(med[w])),
-        "plateau_half_width": float(0.5 * np.mean(hi[w] - lo[w])),
-    }
-    if c0 is not None:
-        t_impact = impact_time(*filtered(t, med)[:2])
-        for name, curve in (("lo", lo), ("median", med), ("hi", hi)):
-            grid, f, _ = filtered(t, curve)
-            out[f"impulse_{name}"] = impulse(grid, f, t_impact)
-            grid_ac, f_ac, _ = filtered(t, curve, acoustic_window(c0))
-            out[f"peak_ac_{name}"] = acoustic_peak(grid_ac, f_ac, t_impact)
-    return out
 
 
 def event_statistics(events, c0):
@@ -456,53 +371,6 @@ def simulate(resolution, end_star=T_END, walls="free_slip", **numerics):
             for k in ("leapfrog", "image_pressure", "density_diffusion", "wall_repulsion")
         },
     }, wall
-
-
-def impact_window(t_star, t_impact):
-    """The samples of the first-impact window IMPULSE_WINDOW about t_impact (t*)."""
-    return (t_star >= t_impact + IMPULSE_WINDOW[0]) & (t_star <= t_impact + IMPULSE_WINDOW[1])
-
-
-def impulse(t_star, p_star, t_impact):
-    """Pressure impulse of the first impact, int p* dt* over IMPULSE_WINDOW about t_impact (docstring,
-    metric 5); nan if the record does not cover the window."""
-    if not np.isfinite(t_impact) or t_star[-1] < t_impact + IMPULSE_WINDOW[1] - 1e-9:
-        return float("nan")
-    w = impact_window(t_star, t_impact)
-    return float(np.trapezoid(p_star[w], t_star[w]))
-
-
-def acoustic_peak(t_star, p_star_ac, t_impact):
-    """The largest acoustically filtered p* in the first-impact window (docstring, metric 5)."""
-    if not np.isfinite(t_impact) or t_star[-1] < t_impact + IMPULSE_WINDOW[1] - 1e-9:
-        return float("nan")
-    return float(p_star_ac[impact_window(t_star, t_impact)].max())
-
-
-def metrics(run):
-    """The case's numbers from a simulate() result: impact time, peaks and the first-impact pressure
-    impulse from the 1 ms-filtered series; plateau mean and sd and the first-impact peak after the
-    acoustic filter (tau_ac = 4 H / c0), and the 1 ms-filtered plateau sd beside it (reported, not
-    checked). The impulse window is placed at each record's own impact time at sensor 2."""
-    out = {"status": run["status"], "reflections": run["reflections"]}
-    t, p = run["t_star"], run["p_star"]
-    if len(t) < 2:
-        return out
-    tau_ac = acoustic_window(run["c0"])
-    out["acoustic_window_s"] = tau_ac
-    t_impact = impact_time(*filtered(t, p[:, 1])[:2])
-    for k in range(len(SENSORS_Y)):
-        grid, f, raw = filtered(t, p[:, k])
-        grid_ac, f_ac, _ = filtered(t, p[:, k], tau_ac)
-        out[f"impact_s{k + 1}"] = impact_time(grid, f)
-        out[f"peak_s{k + 1}"] = float(f.max())
-        out[f"peak_raw_s{k + 1}"] = float(raw.max())
-        out[f"impulse_s{k + 1}"] = impulse(grid, f, t_impact)
-        out[f"peak_ac_s{k + 1}"] = acoustic_peak(grid_ac, f_ac, t_impact)
-        if grid[-1] >= PLATEAU[1] - 1e-9:
-            out[f"plateau_sd_1ms_s{k + 1}"] = window_mean_sd(grid, f)[1]
-            out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = window_mean_sd(grid_ac, f_ac)
-    return out
 
 
 def allowance(key, resolution):

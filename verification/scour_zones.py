@@ -1,7 +1,7 @@
 """The nappe-zone scour depth of the scouring study (issue 11): d restricted to the part of the layer
 the overflow nappe scours, leaving out the end-wall zone, where the outlet digs its own trough.
 
-    python -m verification.scour_zones --from runs/scour_study --from /work/main/runs/scour_study
+    python -m verification.scour_zones --from runs/scour_study --from MAIN_CHECKOUT/runs/scour_study
         # add the zone columns to every case in verification/results/scour/cases/ that lacks them,
         # from its run's scour_profiles.csv (copied to cases/<case>_profiles.csv)
 

@@ -1,5 +1,6 @@
 """The 2D interFoam reference against the experiment and SPH, with the impact case's own metrics
-(verification/impact_pressure.py: filtered, impact_time, window_mean_sd, metrics, band_statistics).
+(reference_cases/lobovsky_measurement.py, shared with verification/impact_pressure.py: filtered,
+impact_time, window_mean_sd, metrics, band_statistics).
 
     python -m reference_cases.openfoam_lobovsky_impact.compare [--sph-fields R=RUN.npz ...]
 
@@ -21,9 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from reference_cases import _common as C
+from reference_cases import lobovsky_measurement as lm
+from reference_cases.mesh_convergence import GCI_SAFETY, richardson
 from reference_cases.openfoam_lobovsky_impact import run as R
-from verification import impact_pressure as ip
 
+# the SPH case's committed resolution study (read as data: verification/impact_pressure.py writes it)
+SPH_STUDY = C.REPO_ROOT / "verification" / "results" / "impact_pressure" / "study.csv"
 GRADIENT_PAIR = (1, 3)  # sensors 2 and 4 (15 and 80 mm): the wall pressure gradient between them
 FOAM_COLORS = ("C2", "C1", "C4")  # interFoam meshes, coarse to fine
 SPH_COLORS = ("C0", "C9")  # SPH runs (free slip, no slip)
@@ -34,34 +38,34 @@ KEYS = ("impact_s2", "plateau_mean_s2", "plateau_sd_s2", "plateau_mean_s1", "pla
 def gradient(m: dict) -> float:
     """Mean wall pressure gradient between sensors 2 and 4 over the plateau, in rho g (hydrostatic = 1)."""
     a, b = GRADIENT_PAIR
-    dy = ip.SENSORS_Y[b] - ip.SENSORS_Y[a]
-    return (m[f"plateau_mean_s{a + 1}"] - m[f"plateau_mean_s{b + 1}"]) * ip.H / dy
+    dy = lm.SENSORS_Y[b] - lm.SENSORS_Y[a]
+    return (m[f"plateau_mean_s{a + 1}"] - m[f"plateau_mean_s{b + 1}"]) * lm.H / dy
 
 
 def event_metrics(events) -> dict:
     """The case's metrics of the measured event 5 (each sensor has its own time base)."""
     out = {}
-    tau = ip.acoustic_window(10.0 * np.sqrt(2.0 * ip.G * ip.H))
+    tau = lm.acoustic_window(10.0 * np.sqrt(2.0 * lm.G * lm.H))
     for k, (te, pe) in enumerate(events):
-        g, f, _ = ip.filtered(te, pe)
-        out[f"impact_s{k + 1}"] = ip.impact_time(g, f)
+        g, f, _ = lm.filtered(te, pe)
+        out[f"impact_s{k + 1}"] = lm.impact_time(g, f)
         out[f"peak_s{k + 1}"] = float(f.max())
-        ga, fa, _ = ip.filtered(te, pe, tau)
-        out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = ip.window_mean_sd(ga, fa)
+        ga, fa, _ = lm.filtered(te, pe, tau)
+        out[f"plateau_mean_s{k + 1}"], out[f"plateau_sd_s{k + 1}"] = lm.window_mean_sd(ga, fa)
     return out
 
 
 def sph_rows(fields: dict) -> dict:
     """SPH metrics per resolution: from recorded runs where given, else the committed study."""
     rows = {}
-    with open(ip.STUDY) as fh:
+    with open(SPH_STUDY) as fh:
         for r in csv.DictReader(fh):
             rows[f"SPH H/{r['resolution']} (study)"] = {k: float(r[k]) for k in KEYS if k in r}
     for res, d in sorted(fields.items()):
-        c0 = 10.0 * np.sqrt(2.0 * ip.G * ip.H)
+        c0 = 10.0 * np.sqrt(2.0 * lm.G * lm.H)
         run = {"t_star": d["sensor_t_star"], "p_star": d["sensor_p_star"], "status": "completed",
                "reflections": 0, "c0": c0}  # fmt: skip
-        rows[f"SPH {res} (fields run)"] = ip.metrics(run)
+        rows[f"SPH {res} (fields run)"] = lm.metrics(run)
     return rows
 
 
@@ -97,9 +101,7 @@ def table(rows: dict, ref: dict) -> list[str]:
 
 def mesh_spread(foam_rows: dict, suffix: str = "") -> dict:
     """Spread of the plateau mean at sensor 2 over the interFoam meshes of the reference set-up, and
-    the Richardson estimate where three meshes converge monotonically (verification.common)."""
-    from verification.common import GCI_SAFETY, richardson
-
+    the Richardson estimate where three meshes converge monotonically (mesh_convergence.py)."""
     ref = {}
     for k, m in foam_rows.items():
         mesh, _, rest = k.split("H/")[1].partition(",")
@@ -113,7 +115,7 @@ def mesh_spread(foam_rows: dict, suffix: str = "") -> dict:
             "spread": round(np.ptp(list(vals.values())), 4),
         }
         if len(vals) >= 3:
-            fit = richardson([ip.H / n for n in vals], list(vals.values()))
+            fit = richardson([lm.H / n for n in vals], list(vals.values()))
             if fit is not None:
                 finest = max(vals)
                 entry["richardson_limit"] = round(float(fit[1]), 4)
@@ -138,10 +140,10 @@ def foot_boxes_openfoam(label: str, cells_per_h: int, box_w: float, box_y: np.nd
     k = np.digitize(c[:, 1], box_y) - 1
     rows = []
     for t, d in time_dirs(case):
-        if not ip.PLATEAU[0] <= t / ip.TIME_SCALE <= ip.PLATEAU[1] or not (d / "p").is_file():
+        if not lm.PLATEAU[0] <= t / lm.TIME_SCALE <= lm.PLATEAU[1] or not (d / "p").is_file():
             continue
         a = np.clip(read_internal_field(d / "alpha.water", n), 0.0, 1.0)
-        p = read_internal_field(d / "p", n) / (ip.RHO0 * ip.G * ip.H)
+        p = read_internal_field(d / "p", n) / (lm.RHO0 * lm.G * lm.H)
         rows.append([np.sum((a * p)[inside & (k == j)]) / max(np.sum(a[inside & (k == j)]), 1e-12)
                      for j in range(len(box_y) - 1)])  # fmt: skip
     return np.mean(rows, axis=0) if rows else None
@@ -151,14 +153,14 @@ def wall_force(y: np.ndarray, p: np.ndarray, top: float = 0.3) -> float:
     """Integral of p* over the wall from 0 to `top` (trapezoid, p held at the ends), in rho g H^2."""
     yy = np.concatenate([[0.0], y[y < top], [top]])
     pp = np.interp(yy, y, p)
-    return float(np.sum(0.5 * (pp[1:] + pp[:-1]) * np.diff(yy)) / ip.H)
+    return float(np.sum(0.5 * (pp[1:] + pp[:-1]) * np.diff(yy)) / lm.H)
 
 
 def field_table(foam: dict, fields: dict) -> list[str]:
     """Where SPH differs from interFoam: the wall force, the pressure at the wall's foot (the particles'
     own p against the cells'), and the water's depth and mean velocity within 0.1 m of the wall."""
     lines = []
-    win = ip.PLATEAU
+    win = lm.PLATEAU
     for res, d in sorted(fields.items()):
         w = (d["t_star"] >= win[0]) & (d["t_star"] <= win[1])
         prof = d["profile"][w].mean(axis=0)
@@ -225,18 +227,18 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    tau = ip.acoustic_window(10.0 * np.sqrt(2.0 * ip.G * ip.H))
+    tau = lm.acoustic_window(10.0 * np.sqrt(2.0 * lm.G * lm.H))
     fig, axes = plt.subplots(2, 2, figsize=(12, 8))
     ax = axes[0, 0]
     bt, lo, _, hi = band
     ax.fill_between(bt, lo, hi, color="0.85", label="experiment: 2.5-97.5 % of 100 repetitions")
     te, pe = events[1]
-    ax.plot(*ip.filtered(te, pe)[:2], color="0.4", lw=0.8, label="experiment, event 5 (1 ms)")
+    ax.plot(*lm.filtered(te, pe)[:2], color="0.4", lw=0.8, label="experiment, event 5 (1 ms)")
     for _label, r in sorted(foam.items(), key=lambda kv: kv[1]["cells_per_H"]):
-        g, fa, _ = ip.filtered(r["t_star"], r["p_star"][:, 1])
+        g, fa, _ = lm.filtered(r["t_star"], r["p_star"][:, 1])
         ax.plot(g, fa, lw=1.0, **_style(r))
     for j, (res, d) in enumerate(sorted(fields.items())):
-        g, fa, _ = ip.filtered(d["sensor_t_star"], d["sensor_p_star"][:, 1], tau)
+        g, fa, _ = lm.filtered(d["sensor_t_star"], d["sensor_p_star"][:, 1], tau)
         ax.plot(
             g, fa, color=SPH_COLORS[j % 2], lw=1.2, label=f"SPH {res} (acoustic filter {tau * 1000:.0f} ms)"
         )
@@ -252,12 +254,12 @@ def plot(foam: dict, fields: dict, events, band, path: Path) -> Path:
         prof = np.loadtxt(R.DATA_DIR / f"openfoam_{label}_wall_profile.csv", delimiter=",", skiprows=2)
         ax.plot(prof[:, 1], prof[:, 0], **_style(r))
     for j, (res, d) in enumerate(sorted(fields.items())):
-        w = (d["t_star"] >= ip.PLATEAU[0]) & (d["t_star"] <= ip.PLATEAU[1])
+        w = (d["t_star"] >= lm.PLATEAU[0]) & (d["t_star"] <= lm.PLATEAU[1])
         ax.plot(
             d["profile"][w].mean(axis=0), d["profile_y"], color=SPH_COLORS[j % 2], label=f"SPH {res} (probe)"
         )
     em = event_metrics(events)
-    ax.plot([em[f"plateau_mean_s{k + 1}"] for k in range(4)], ip.SENSORS_Y, "ks", label="experiment, event 5")
+    ax.plot([em[f"plateau_mean_s{k + 1}"] for k in range(4)], lm.SENSORS_Y, "ks", label="experiment, event 5")
     ax.set_ylim(0, 0.3)
     ax.set_xlabel("mean p / (rho g H) over t* 3-5.5")
     ax.set_ylabel("height on the far wall (m)")
@@ -313,15 +315,15 @@ def main(argv=None) -> int:
         d = dict(np.load(path))
         walls = str(d.get("walls", "free_slip"))
         fields[f"H/{res}" + ("" if walls == "free_slip" else f", {walls} walls")] = d
-    foam = ip.openfoam_reference()
-    events, band, _ = ip.experiment()
-    ref = ip.band_statistics(band)
-    c0 = 10.0 * np.sqrt(2.0 * ip.G * ip.H)
+    foam = lm.openfoam_reference()
+    events, band, _ = lm.experiment()
+    ref = lm.band_statistics(band)
+    c0 = 10.0 * np.sqrt(2.0 * lm.G * lm.H)
     rows = {"experiment, event 5": event_metrics(events)}
     foam_rows = {}
     for r in sorted(foam.values(), key=lambda r: (r["top"], r["walls"], r["cells_per_H"])):
         name = f"interFoam H/{r['cells_per_H']}" + R.variant(r["top"], r["walls"]).replace("_", ", ")
-        foam_rows[name] = ip.metrics({"t_star": r["t_star"], "p_star": r["p_star"], "status": "completed",
+        foam_rows[name] = lm.metrics({"t_star": r["t_star"], "p_star": r["p_star"], "status": "completed",
                                       "reflections": 0, "c0": c0})  # fmt: skip
     rows.update(foam_rows)
     rows.update(sph_rows(fields))

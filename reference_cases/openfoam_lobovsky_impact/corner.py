@@ -183,10 +183,10 @@ def plot_series(labels: list[str], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from verification import impact_pressure as ip
+    from reference_cases import lobovsky_measurement as lm
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    _, band, _ = ip.experiment()
+    _, band, _ = lm.experiment()
     bt, lo, med, hi = band
     a2.fill_between(bt, lo, hi, color="0.85", label="experiment: 2.5-97.5 % of 100 repetitions")
     a2.plot(bt, med, color="0.5", lw=0.8, label="experiment: median")
@@ -195,7 +195,7 @@ def plot_series(labels: list[str], path: Path) -> Path:
         t, b = backflow_series(label)
         a1.plot(t, b, marker="o", ms=3, label=f"interFoam {label}", **style)
         d = R.read_sensors(R.DATA_DIR / f"openfoam_{label}_sensors.csv")
-        g, f, _ = ip.filtered(d["t_star"], d["p_star"][:, 1])
+        g, f, _ = lm.filtered(d["t_star"], d["p_star"][:, 1])
         a2.plot(g, f, lw=0.9, label=f"interFoam {label}", **style)
     a1.axhline(0.0, color="k", lw=0.6)
     a1.set_ylabel("mean u, x > 1.56 m, y < 20 mm (m/s)")

@@ -24,8 +24,8 @@ sum(alpha.water * dy) over the wall's faces.
 Outputs (data/): openfoam_h{N}_sensors.csv (t_s, t_star, p_star_s1..s4, wall_depth_m),
 openfoam_h{N}_wall_profile.csv (the wall pressure and alpha profile averaged over the plateau window
 t* 3-5.5) and openfoam_h{N}_strip.csv (every 0.05 s: mean depth and velocity of the water within
-0.1 m of the far wall); the run's metrics (verification.impact_pressure.metrics, the same functions as SPH) in
-manifest.json. Fields are written every 0.05 s into work/ (kept for analysis; not in git).
+0.1 m of the far wall); the run's metrics (reference_cases/lobovsky_measurement.py, the same functions as
+SPH) in manifest.json. Fields are written every 0.05 s into work/ (kept for analysis; not in git).
 """
 
 from __future__ import annotations
@@ -243,13 +243,13 @@ def write_strip(path: Path, case: Path, cells_per_h: int, header: str) -> Path:
 
 
 def impact_metrics(t_star: np.ndarray, p_star: np.ndarray) -> dict:
-    """The impact case's metrics (verification.impact_pressure.metrics, the same code as for SPH).
+    """The impact case's metrics (lobovsky_measurement.metrics, the same code as for SPH).
     The plateau's moving average is the SPH scene's tau_ac = 4 H / c0 (c0 = 10 sqrt(2 g H)), so
     that SPH, experiment and this reference pass through the same filter."""
-    from verification import impact_pressure as ip
+    from reference_cases.lobovsky_measurement import metrics
 
     c0 = 10.0 * math.sqrt(2.0 * G * H)
-    m = ip.metrics({"t_star": t_star, "p_star": p_star, "status": "completed", "reflections": 0, "c0": c0})
+    m = metrics({"t_star": t_star, "p_star": p_star, "status": "completed", "reflections": 0, "c0": c0})
     return {k: (round(v, 5) if isinstance(v, float) else v) for k, v in m.items()}
 
 

@@ -25,7 +25,7 @@ baffle between blocks that share no vertex along it):
 
 A 1D column (no pile, T tall, head drop H over T) checks the Darcy coefficient of both:
 q must equal k H/T to solver tolerance. The closed-form value Q/(kH) = K(m')/(2K(m)),
-m = sin(pi s/(2T)) (verification.analytic.seepage.sheet_pile_shape_factor) is the third
+m = sin(pi s/(2T)) (reference_cases/sheet_pile_discharge.py) is the third
 check: it assumes an unbounded layer, L = 3T makes the truncation error ~exp(-pi L/T)
 (~1e-4; measured below with L = 6T).
 
@@ -61,7 +61,7 @@ import numpy as np
 
 from reference_cases import _common as C
 from reference_cases.openfoam_dam_break_2d.run import foam_version, read_internal_field
-from verification.analytic.seepage import sheet_pile_shape_factor
+from reference_cases.sheet_pile_discharge import sheet_pile_shape_factor
 
 CASE_DIR = Path(__file__).resolve().parent
 TEMPLATE_DIR = CASE_DIR / "case"

@@ -35,6 +35,8 @@ from ..kernels import cubic_spline_w
 from ..materials import Phase
 from ..particles import FieldSpec, Mirror
 from ..term import Equation, Stage, Term
+from .bed_surface import surface_limits
+from .erodible import erosion_materials
 
 SHEAR_WEIGHT = FieldSpec(
     0, np.float64, "sum of W over a bed-surface particle's free-water pairs (0: no traction)", Mirror.SCALAR
@@ -50,8 +52,6 @@ def bed_shear_spec(dim):
 
 def bed_shear_on(scene, materials):
     """Whether the traction replaces the drag on the free water over an eroding bed."""
-    from .shields_pickup import erosion_materials
-
     return scene.numerics.bed_shear == "log_law" and bool(erosion_materials(scene, materials))
 
 
@@ -205,8 +205,6 @@ class FreeWater(Term):
         return cls(scene) if bed_shear_on(scene, materials) else None
 
     def __init__(self, scene):
-        from .bed_surface import surface_limits
-
         super().__init__()
         self.limit = surface_limits(scene.dim, scene.numerics.h_over_dx)[1]
         self.fields = {"free_water": FREE_WATER}

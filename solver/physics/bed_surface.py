@@ -25,6 +25,7 @@ from ..kernels import cubic_spline_dwdr, cubic_spline_w, kernel_values
 from ..materials import Phase
 from ..particles import FieldSpec, Mirror
 from ..term import Equation, Stage, Term
+from .erodible import erosion_materials
 
 BED_FRACTION = FieldSpec(0, np.float64, "kernel sum of the bed (non-suspended soil) at soil particles")
 
@@ -105,8 +106,6 @@ class BedSurface(Term):
 
     @classmethod
     def build(cls, scene, materials):
-        from .shields_pickup import erosion_materials
-
         return cls(scene) if erosion_materials(scene, materials) else None
 
     def __init__(self, scene):

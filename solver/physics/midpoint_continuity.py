@@ -5,7 +5,7 @@ drift's midpoint,
     rho_{n+1} = rho_n + dt [ sum_j m_j v_ij^{n+1/2} . grad_i W(x_i^mid - x_j^mid) + D_i ],
     x^mid = (x_n + x_{n+1}) / 2,                                 seed eq. (6) + density diffusion
 
-Why the midpoint (docs: /work/coord/impact_design.md sec. 1, README "Time integration"): over one
+Why the midpoint (the impact design note, not in the repository, sec. 1; README "Time integration"): over one
 step a pair's summation density changes by m [W(r_{n+1}) - W(r_n)]; the midpoint rule integrates
 that to second order and is time-reversible, where the end point x_{n+1} (the former
 "symplectic_density" option) adds a first-order error (dt^2/2) v.(grad grad W).v of fixed sign

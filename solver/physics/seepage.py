@@ -60,6 +60,7 @@ from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
 from .bed_shear import bed_shear_on
+from .erodible import erosion_materials
 from .fixed_particles import FIXED
 
 PORE_PRESSURE = FieldSpec(
@@ -121,8 +122,6 @@ class SeepageSettings:
             kappa = lattice_gradient_normalisation(scene.dim, scene.numerics.h_over_dx)
         erodes = None
         if bed_shear_on(scene, materials):
-            from .shields_pickup import erosion_materials
-
             erodes = np.zeros(n_mat, np.uint8)
             erodes[erosion_materials(scene, materials)] = 1
         return cls(form, drag, solid, grain, scene.numerics.cfl.drag, one, walls, linear, kappa, erodes)

@@ -40,7 +40,6 @@ from ..config import kernel
 from ..kernels import cubic_spline_w
 from ..materials import Phase
 from ..particles import FieldSpec, Mirror
-from ..scene import Soil
 from ..sediment import (
     ROUGHNESS_PER_GRAIN,
     bed_friction_velocity,
@@ -51,22 +50,12 @@ from ..sediment import (
 from ..term import Equation, Stage, Term
 from .bed_shear import SHEAR_WEIGHT, bed_shear_on, bed_shear_spec
 from .bed_surface import surface_limits
+from .erodible import erosion_materials
 
 SUSPENDED = FieldSpec(0, np.uint8, "1: soil picked up by the flow (no shear strength)", Mirror.SCALAR)
 ERODED_SHARE = FieldSpec(0, np.float64, "share of a bed-surface particle's mass eroded so far (0-1)")
 SHIELDS = FieldSpec(0, np.float64, "Shields number of the flow over a bed-surface particle (0 elsewhere)")
 MIN_HEIGHT = 1.0  # pairs with y >= MIN_HEIGHT dx sample the flow: the second water row up (docs/erosion.md)
-
-
-def erosion_materials(scene, materials):
-    """Material ids of the soils that erode in this scene (none without water or with erosion off)."""
-    if scene.numerics.erosion != "shields" or not materials.has_phase(Phase.WATER):
-        return []
-    return [
-        k
-        for k, name in enumerate(materials.names)
-        if isinstance(scene.materials[name], Soil) and scene.materials[name].grain_size is not None
-    ]
 
 
 class SedimentTable:

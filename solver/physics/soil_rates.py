@@ -20,7 +20,7 @@ from ..particles import FieldSpec
 from ..tensors import N_SYM
 from ..term import Equation, Integrated, Stage, Term
 from . import velocity_gradient
-from .shields_pickup import erosion_materials
+from .erodible import erosion_materials
 
 
 @kernel

@@ -15,7 +15,7 @@ paper's section and equation numbers were not re-checked here: the phase-1 memo'
 Here H is the scene's largest initial height of a block above the lowest point of any block
 along -g, so D = 5 |g| H; with g = 0 the term is absent.
 
-Why it is needed (issue 15, /work/coord/impact_design.md sec. 4): with image particles the
+Why it is needed (issue 15; the impact design note, not in the repository, sec. 4): with image particles the
 repulsion a particle feels from its own image is proportional to dW/dr at r = 2 d, which
 vanishes as d -> 0 (the cubic spline's gradient is zero at r = 0); nothing in the image model
 stops a particle that is already closer than dx/2 (slow bottom-row and toe particles, 5 mm/s),

@@ -14,7 +14,7 @@ Sources (what each formula is, not how it is coded):
   * Terzaghi (1925, 1943) 1D consolidation, single drainage path H:
     u/u0 = sum_m (2/M) sin(M z/H) exp(-M^2 T_v), M = (2m+1) pi/2, T_v = c_v t / H^2;
     U = 1 - sum_m (2/M^2) exp(-M^2 T_v). Craig ch. 7; the same series generated
-    /work/shared/reference-data/terzaghi_*.csv (copied to verification/data/).
+    the shared reference data's terzaghi_*.csv (copied to verification/data/).
   * Compressible pore water: the storage term of Biot's (1941) consolidation equation
     with incompressible grains, c_v = k / (gamma_w (m_v + n / K_w)) (Verruijt, Theory and
     Problems of Poroelasticity, 2013, ch. 1-2: S = n/K_w + m_v). The undrained response to
@@ -290,28 +290,3 @@ def terzaghi_cost(
 
 
 # ----------------------------------------------------------------------------- sheet pile (flow net)
-def elliptic_k(m: float) -> float:
-    """Complete elliptic integral of the first kind K(m), m the modulus (not m^2):
-    K = pi / (2 AGM(1, sqrt(1 - m^2))) (arithmetic-geometric mean; Abramowitz & Stegun 17.6)."""
-    if not 0.0 <= m < 1.0:
-        raise ValueError("modulus must be in [0, 1)")
-    a, b = 1.0, math.sqrt(1.0 - m * m)
-    while abs(a - b) > 1e-15 * a:
-        a, b = 0.5 * (a + b), math.sqrt(a * b)
-    return math.pi / (2.0 * a)
-
-
-def sheet_pile_shape_factor(penetration: float, thickness: float) -> float:
-    """Q / (k H) for a single sheet pile of zero thickness driven to `penetration` s into a
-    homogeneous layer of `thickness` T on an impermeable base, laterally unbounded, with the
-    ground surface at heads H apart on either side (the flow-net ratio N_f / N_d).
-
-    Conformal-mapping solution (Pavlovsky; Harr 1962, Groundwater and Seepage, ch. 5;
-    Polubarinova-Kochina 1962): Q / (k H) = K(m') / (2 K(m)), m = sin(pi s / (2 T)),
-    m' = cos(pi s / (2 T)). Limits: s -> T gives 0 (full cut-off), s -> 0 diverges (a
-    zero-width step in head on an unbounded surface), s = T/2 gives exactly 1/2.
-    """
-    if not 0.0 < penetration < thickness:
-        raise ValueError("need 0 < penetration < thickness")
-    a = math.pi * penetration / (2.0 * thickness)
-    return elliptic_k(math.cos(a)) / (2.0 * elliptic_k(math.sin(a)))
