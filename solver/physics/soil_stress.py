@@ -26,8 +26,8 @@ from ..particles import FieldSpec, Mirror
 from ..tensors import N_SYM
 from ..term import Equation, Stage, Term
 from ..timestep import Constraint
+from .erodible import erosion_materials
 from .sand_state import plane_strain_return, relative_dilatancy_index, state_angles, state_constants
-from .shields_pickup import erosion_materials
 from .soil_rates import SHEAR_RATE  # the field SoilRates writes for mu(I) soils
 
 MOHR_COULOMB = int(YieldModel.MOHR_COULOMB)  # plain ints: compile-time constants in the kernels
