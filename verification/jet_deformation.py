@@ -1,5 +1,5 @@
 """Why the bed sinks under the plunging jet (issue 24; docs/scour_plunging.md, "Why the bed sinks
-under the jet"): the plunging scour set-up (solver/scenes/scour_plunging_saturated.toml) run with a
+under the jet"): the plunging scour set-up (solver/scenes/scour_plunging_seed_sand_saturated.toml) run with a
 set of overrides (an ablation), measuring where the hole under the jet comes from.
 
     python -m verification.jet_deformation run --dx 0.005 --end 0.25 [--set KEY=VALUE ...] [--tag NAME]
@@ -36,8 +36,9 @@ import numpy as np
 from verification import seepage_common as sc
 
 RESULTS = Path(__file__).with_name("results") / "jet_deformation"
+SETUP = "plunging_seed_sand"  # the ablations kept: issue 24, the seed's sand (docs/scour_plunging.md)
 Q = 0.11  # the study's case of the issue (saturated, q = 0.11)
-SURFACE = 0.105  # m, the layer's top (scour_plunging_saturated.toml)
+SURFACE = 0.105  # m, the layer's top (scour_plunging_*.toml)
 JET_ZONE = (
     0.15,
     0.25,
@@ -57,7 +58,7 @@ def scene(dx, end, sets=()):
     from solver.scene import parse_scene
     from verification.scour_study import SETUPS, scene_raw
 
-    raw = scene_raw("saturated", Q, dx, end, sets=list(sets) + ["output.render=false"], setup="plunging")
+    raw = scene_raw("saturated", Q, dx, end, sets=list(sets) + ["output.render=false"], setup=SETUP)
     return parse_scene(raw, SETUPS["plunging"].scene_path("saturated"))
 
 
@@ -363,7 +364,7 @@ def seepage_check(npz, window="0.15-0.25", smoothing=LOAD_SMOOTHING):
                 run_ex.append(np.mean([head[i, j] - SURFACE for j in cells]))
                 darcy_ex.append(np.mean([darcy[i, j] - SURFACE for j in cells]))
         penetration.append(float(np.mean(run_ex) / np.mean(darcy_ex)))
-    i_c = 1.15  # (rho_dry - (1 - n) rho_w) / rho_w, scour_plunging_saturated.toml: (1800 - 650) / 1000
+    i_c = 1.15  # (rho_dry - (1 - n) rho_w) / rho_w of the seed's sand: (1800 - 650) / 1000
     h_top, _ = steady_head(x, load, y=[SURFACE])
     heave = {}
     for d in HEAVE_DEPTHS:

@@ -6,10 +6,13 @@ dry and saturated, six q, and its convergence at 5, 3.5 and 2.5 mm.
     python -m verification.scour_plunging report                # tables and figures from the runs made
     python -m verification.scour_study run saturated 0.11 --setup plunging --dx 0.0025 --end 1.0   # one run
 
-The set-up is solver/scenes/scour_plunging_{dry,saturated}.toml (docs/scour_plunging.md: a 0.15 m
+The set-up is solver/scenes/scour_plunging_{dry,saturated}.toml, a sand with a state (docs/sand.md;
+`--setup plunging_seed_sand`: issue 24's runs with the seed's sand, scour_plunging_seed_sand_*.toml)
+(docs/scour_plunging.md: a 0.15 m
 fall so that the nappe plunges, a 0.63 m layer, a free overfall downstream, 0.5 mm sand that erodes,
 docs/erosion.md). The runs go through verification/scour_study.py's machinery (`--setup plunging`):
-each leaves a summary and its d(t) series in verification/results/scour_plunging/cases/.
+each leaves a summary and its d(t) series in verification/results/scour_plunging_state/cases/
+(verification/results/scour_plunging/cases/ for the seed's sand).
 
 The depth. d_jet(t): the deepest drop of the bed surface (solver/output/scour.py: the kernel soil
 fraction's 1/2 contour of the bed, suspended soil left out, a surface particle thinned by its worn
