@@ -27,6 +27,8 @@ def plane_strain_return(p, s6, sin_phi, sin_psi, c, k, g):
     cos_phi = np.sqrt(1 - sin_phi**2)
     if p < -c * cos_phi / sin_phi:
         return -c * cos_phi / sin_phi, np.zeros(6), None
+    if 0.5 * np.trace(-sigma[:2, :2]) < -c * cos_phi / sin_phi:  # the in-plane mean beyond the apex
+        return None
     w, v = np.linalg.eigh(-sigma[:2, :2])  # in-plane principal stresses, compression positive, ascending
     s3, s1 = w
     f = 0.5 * (s1 - s3) - 0.5 * (s1 + s3) * sin_phi - c * cos_phi

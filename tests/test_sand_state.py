@@ -48,9 +48,9 @@ def test_plane_strain_return_against_twin(rng):
         sin_psi = math.sin(math.radians(rng.uniform(-25, 25)))
         fast = plane_strain_return(p, *s6, sin_phi, sin_psi, 0.0, K, G)
         twin = nv.plane_strain_return(p, s6, sin_phi, sin_psi, 0.0, K, G)
-        if twin is None:  # returned past the apex: the in-plane radius is all returned
+        if twin is None:  # at or past the apex: stress-free at the cut-off, a crack
             apex += 1
-            assert fast[1] == pytest.approx(fast[2], abs=1e-6 * p) and fast[4] == 0.0
+            assert fast[:7] == (0.0,) * 7 and fast[7] == fast[8] == pytest.approx(-p / K)
             continue
         p_n, s_n, dvol = twin
         assert fast[0] == pytest.approx(p_n, rel=1e-9, abs=1e-6)
@@ -62,7 +62,15 @@ def test_plane_strain_return_against_twin(rng):
             w = np.linalg.eigvalsh(-sig[:2, :2])
             f = 0.5 * (w[1] - w[0]) - 0.5 * (w[1] + w[0]) * sin_phi
             assert f == pytest.approx(0.0, abs=1e-6 * max(p, 1.0))
-    assert hits > 100  # the plastic branch was exercised
+    assert hits > 100 and apex > 0  # the plastic and the apex branches were exercised
+
+
+def test_in_plane_tension_under_out_of_plane_compression_cracks():
+    """The blow-up of the first dry plunging run (t = 0.615 s): an in-plane tensile mean with a compressive
+    sigma_zz (p > 0) has f > 0 at R = 0; the return must crack it, not divide by R = 0."""
+    p, s6 = 1.0e3, np.array([2.0e3, 2.0e3, -4.0e3, 0.0, 0.0, 0.0])  # in-plane mean -1 kPa, sigma_zz 5 kPa
+    out = plane_strain_return(p, *s6, math.sin(math.radians(40)), math.sin(math.radians(10)), 0.0, K, G)
+    assert np.all(np.isfinite(out)) and out[:7] == (0.0,) * 7 and out[8] == pytest.approx(-p / K)
 
 
 def test_flow_rule_dilatancy_by_hand():

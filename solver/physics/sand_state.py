@@ -48,24 +48,23 @@ def plane_strain_return(p, s0, s1, s2, s3, s4, s5, sin_phi, sin_psi, cohesion, b
     g = R - m sin(psi), so d eps_v^p / (d eps_1^p - d eps_3^p) = sin(psi) (Bolton's plane-strain dilatancy),
     d eps_zz^p = 0. Elastic corrector: R -= G dl, m += (K + G/3) sin(psi) dl, sigma_zz (compression +)
     += (K - 2G/3) sin(psi) dl, dl = f / (G + (K + G/3) sin(psi) sin(phi)): lands on f = 0 (docs/sand.md).
-    Below the tension cut-off p < -c cot(phi) the soil cracks (p at the cut-off, s = 0), as the seed's
-    Mohr-Coulomb. Returns (p, s0..s5, dvol, dcrack) as return_map."""
+    Below the tension cut-off p < -c cot(phi), with an in-plane mean beyond the apex, or where the return
+    would pass the apex (all of R returned), the soil cracks: stress-free at the cut-off (p = -c cot(phi),
+    s = 0), the seed's tension cut-off. Returns (p, s0..s5, dvol, dcrack) as return_map; dcrack < 0 where
+    a compressed particle is released (its density then goes to the cut-off's, soil_stress_state)."""
     cos_phi = np.sqrt(1.0 - sin_phi * sin_phi)
-    p_cut = -cohesion * cos_phi / sin_phi
-    if p < p_cut:
-        d = (p_cut - p) / bulk
-        return p_cut, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, d, d
+    p_cut = -cohesion * cos_phi / sin_phi  # the apex, R = 0 at m = -c cot(phi)
     half_diff = 0.5 * (s0 - s1)  # (sigma_xx - sigma_yy) / 2, tension +
     radius = np.sqrt(half_diff * half_diff + s3 * s3)
     mean = p - 0.5 * (s0 + s1)  # in-plane mean, compression +
     f = radius - mean * sin_phi - cohesion * cos_phi
-    if f <= 0.0:
-        return p, s0, s1, s2, s3, s4, s5, 0.0, 0.0
     dl = f / (shear + (bulk + shear / 3.0) * sin_psi * sin_phi)
     new_radius = radius - shear * dl
-    if new_radius < 0.0:  # the apex: all of the radius returned
-        dl = radius / shear
-        new_radius = 0.0
+    if p < p_cut or (f > 0.0 and (mean < p_cut or new_radius <= 0.0)):
+        d = (p_cut - p) / bulk  # the apex or beyond: stress-free at the cut-off, a crack (soil_stress_state)
+        return p_cut, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, d, d
+    if f <= 0.0:
+        return p, s0, s1, s2, s3, s4, s5, 0.0, 0.0
     scale = new_radius / radius
     mean += (bulk + shear / 3.0) * sin_psi * dl
     szz = p - s2 + (bulk - 2.0 * shear / 3.0) * sin_psi * dl  # sigma_zz, compression +

@@ -213,7 +213,7 @@ def soil_stress_state(
         s[i, 4] = a4
         s[i, 5] = a5
         if eps_vp is not None and update_history:
-            if dcrack > 0.0:  # tension cracking (dvol = dcrack): back to the cut-off density
+            if dcrack != 0.0:  # tension cracking (dvol = dcrack): back to the cut-off density
                 rho[i] += rho0[m] * dcrack
             else:  # plastic dilatancy (psi)
                 eps_vp[i] += dvol
