@@ -34,7 +34,7 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     water and soil draw its water on top of its soil, and `scalar = "material"` draw named colours.
     window: (lo, hi) corners of the part of the plane to show (a zoom; the particles outside it are
     left out, a band above it is left for the title), instead of the domain; curves: (points (n, 2),
-    colour, label) polylines drawn over the particles, named in a legend."""
+    colour, label) polylines drawn over the particles, each over the ones before it, named in a legend."""
     pv.OFF_SCREEN = True
     if window is not None:
         lo, hi = (np.asarray(c, float)[:2] for c in window)
@@ -92,13 +92,12 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     if domain is not None:
         box = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], 0, 0))
         plotter.add_mesh(box, style="wireframe", color="black")
-    for points, colour, label in curves:
-        _add_curve(plotter, points, colour, z=4.0 * spacing)
+    for k, (points, colour, label) in enumerate(curves):  # each in front of those before it
+        _add_curve(plotter, points, colour, z=(4.0 + 0.5 * k) * spacing)
         legend.append([label, colour, "line"])
     if legend:
-        width = 0.3 if curves else 0.14
-        plotter.add_legend(legend, bcolor="white", border=True, size=(width, 0.04 * len(legend) + 0.02),
-                           loc="upper right")  # fmt: skip
+        size = (0.26, 0.03 * len(legend) + 0.02) if curves else (0.14, 0.04 * len(legend) + 0.02)
+        plotter.add_legend(legend, bcolor="white", border=True, size=size, loc="upper right")
     if title:
         plotter.add_text(title, color="black", font_size=12)
     plotter.view_xy()
