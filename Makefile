@@ -12,6 +12,9 @@ END    ?= 0.3
 endif
 NPROC  := $(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)
 THREADS ?= $(if $(filter 1,$(NPROC)),1,2)
+# OpenMP's threads wait asleep, not spinning: with another busy process on the cores, spinning made
+# 2 threads 30 times slower than 1 (docs/scour_plunging.md, "make run")
+OMP_WAIT_POLICY ?= PASSIVE
 OUT    ?= runs/$(basename $(notdir $(SCENE)))
 RUN_ARGS ?=
 NIGHTLY ?= runs/nightly
@@ -28,7 +31,7 @@ $(STAMP): pyproject.toml
 ## in runs/scour_plunging_saturated/: scour.csv (d(t)), scour.png (surfaces, d(t)), scour_hole.png (the
 ## hole). SCENE=scenes/scour_saturated.toml: the seed's 0.025 s; END=, THREADS=, OUT=, RUN_ARGS= override
 run: $(STAMP)
-	$(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite --threads $(THREADS) \
+	OMP_WAIT_POLICY=$(OMP_WAIT_POLICY) $(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite --threads $(THREADS) \
 		$(if $(END),--set scene.end_time=$(END)) $(RUN_ARGS)
 
 ## make test: set up .venv, check the style (ruff, fast), run the test suite
