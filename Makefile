@@ -3,8 +3,20 @@ PYTHON ?= python3.11
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-SCENE  ?= scenes/scour_saturated.toml
-OUT    ?= runs/scour_saturated
+# make run's main job: the saturated plunging scour at 5 mm (q = 0.11) to END s. Another SCENE runs
+# to its own scene.end_time unless END is given; THREADS: Numba threads (2, or 1 on a 1-core machine)
+MAIN_SCENE := scenes/scour_plunging_saturated.toml
+SCENE  ?= $(MAIN_SCENE)
+ifeq ($(SCENE),$(MAIN_SCENE))
+END    ?= 0.3
+endif
+NPROC  := $(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)
+THREADS ?= $(if $(filter 1,$(NPROC)),1,2)
+# OpenMP's threads wait asleep, not spinning: with another busy process on the cores, spinning made
+# 2 threads 30 times slower than 1 (docs/scour_plunging.md, "make run")
+OMP_WAIT_POLICY ?= PASSIVE
+OUT    ?= runs/$(basename $(notdir $(SCENE)))
+RUN_ARGS ?=
 NIGHTLY ?= runs/nightly
 
 .PHONY: run test lint format bench bench-check bench-baseline nightly verify references clean
@@ -15,10 +27,12 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-## make run: set up .venv and run the main job, the seed's saturated scour at q = 0.11 for its 0.025 s
-## (scour depth in runs/scour_saturated/scour.csv, scour.png); SCENE=scenes/dam_break_2d.toml for the dam break
+## make run: set up .venv and run the main job, the saturated plunging scour (q = 0.11, 5 mm) to END s,
+## in runs/scour_plunging_saturated/: scour.csv (d(t)), scour.png (surfaces, d(t)), scour_hole.png (the
+## hole). SCENE=scenes/scour_saturated.toml: the seed's 0.025 s; END=, THREADS=, OUT=, RUN_ARGS= override
 run: $(STAMP)
-	$(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite
+	OMP_WAIT_POLICY=$(OMP_WAIT_POLICY) $(BIN)/scoursph run $(SCENE) --out $(OUT) --overwrite --threads $(THREADS) \
+		$(if $(END),--set scene.end_time=$(END)) $(RUN_ARGS)
 
 ## make test: set up .venv, check the style (ruff, fast), run the test suite
 test: $(STAMP)

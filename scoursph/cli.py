@@ -221,9 +221,25 @@ def _run(args):
         if (out / "scour.csv").is_file():
             print(
                 f"scour: {out}/scour.csv (depth, deepest point, eroded area per output time), "
-                f"{out}/scour_profiles.csv (surface z_s(x, t)), {out}/scour.png"
+                f"{out}/scour_profiles.csv (surface z_s(x, t)), {out}/scour.png (surfaces and depth d(t))"
+                + (f", {out}/scour_hole.png (the hole)" if (out / "scour_hole.png").is_file() else "")
             )
+            last = _last_scour_row(out / "scour.csv")
+            if last is not None:
+                print(
+                    f"scour depth at t = {float(last['t_s']):.4g} s: {1000 * float(last['depth_m']):.1f} mm "
+                    f"(deepest at x = {float(last['x_deepest_m']):.3f} m)"
+                )
     return 0
+
+
+def _last_scour_row(path):
+    """The last row of a run's scour.csv as a dict, or None if it has none."""
+    import csv
+
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return rows[-1] if rows else None
 
 
 def _interrupted(exc, args, run_dir):

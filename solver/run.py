@@ -297,10 +297,13 @@ def _run_scene(scene, out_dir, comm, quiet, write, overwrite, restart, checkpoin
 
 def write_run_products(out_dir, scene, status):
     """Products computed from the written series: the scour profile, depth and plot of a scene with
-    soil (solver/output/scour.py). A failure here is reported, never fatal to the run."""
+    soil, and its picture of the hole unless output.render is off or the run was interrupted (be
+    quick) (solver/output/scour.py). A failure here is reported, never fatal to the run."""
     from .output.scour import write_scour_outputs
 
     try:
-        write_scour_outputs(out_dir, scene)
+        write_scour_outputs(
+            out_dir, scene, hole_picture=scene.output.render and not status.startswith("interrupted")
+        )
     except Exception as exc:  # noqa: BLE001 - a post-processing failure must not hide the run's outcome
         print(f"scour measurement failed: {exc}", file=sys.stderr)

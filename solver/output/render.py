@@ -1,4 +1,5 @@
-"""Off-screen picture of a snapshot with pyvista (no display needed)."""
+"""Off-screen pictures of a snapshot with pyvista (no display needed): the whole domain, or a window
+of it (the scour hole, solver/output/scour.py) with curves drawn over the particles."""
 
 from __future__ import annotations
 
@@ -21,22 +22,40 @@ BODY_COLOUR = "#9a9a9a"
 # A saturated bed puts a soil and a pore-water particle at every site: drawn as equal spheres they
 # z-fight into half-coloured balls. Soil is drawn first and water on top, smaller, so both show.
 WATER_ON_SOIL_SIZE = 0.55
+# A window's picture (render_snapshot's window) shows this share of its height again above it, empty,
+# for the title and the curves' legend
+TITLE_BAND = 0.35
 
 
 def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None, domain=None, bodies=(),
-                    material_names=None, water_ids=()):  # fmt: skip
+                    material_names=None, water_ids=(), window=None, curves=()):  # fmt: skip
     """A PNG of one snapshot. bodies: polygons (vertex arrays) drawn in grey; material_names and
     water_ids (the materials' names in id order and the water materials' ids) let a scene with
-    water and soil draw its water on top of its soil, and `scalar = "material"` draw named colours."""
+    water and soil draw its water on top of its soil, and `scalar = "material"` draw named colours.
+    window: (lo, hi) corners of the part of the plane to show (a zoom; the particles outside it are
+    left out, a band above it is left for the title), instead of the domain; curves: (points (n, 2),
+    colour, label) polylines drawn over the particles, each over the ones before it, named in a legend."""
     pv.OFF_SCREEN = True
+    if window is not None:
+        lo, hi = (np.asarray(c, float)[:2] for c in window)
+        if not np.all(hi > lo):
+            raise ValueError(
+                f"window: its upper corner {hi.tolist()} is not above and right of {lo.tolist()}"
+            )
+        xy = np.asarray(fields["position"], float)[:, :2]
+        inside = np.all((xy >= lo) & (xy <= hi), axis=1)
+        fields = {k: np.asarray(v)[inside] for k, v in fields.items()}
+        domain = None
+        hi = hi + np.array([0.0, TITLE_BAND * (hi[1] - lo[1])])  # an empty band on top: title, legend
     cloud = particles_polydata(fields)
     if scalar not in cloud.point_data:  # the scene schema refuses this (output.render_field)
         raise ValueError(f"no field '{scalar}' to render (fields: {', '.join(cloud.point_data)})")
-    lo, hi = (
-        (np.asarray(domain[0], float), np.asarray(domain[1], float))
-        if domain is not None
-        else (cloud.points.min(axis=0)[:2], cloud.points.max(axis=0)[:2])
-    )
+    if window is None:
+        lo, hi = (
+            (np.asarray(domain[0], float), np.asarray(domain[1], float))
+            if domain is not None
+            else (cloud.points.min(axis=0)[:2], cloud.points.max(axis=0)[:2])
+        )
     aspect = float((hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-12))
     # 20 % wider than the domain: tight() centres the domain, the colour bar sits in the margin
     plotter = pv.Plotter(off_screen=True, window_size=(1600, int(np.clip(1600 / 1.2 * aspect, 300, 1400))))
@@ -55,8 +74,9 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     # a sphere's depth bulges by its radius towards the camera: water sits two spacings above the soil
     layers = [(~water, size, 0.0), (water, WATER_ON_SOIL_SIZE * size, 2.0 * spacing)] if layered else [
         (np.ones(cloud.n_points, bool), size, 0.0)]  # fmt: skip
+    legend = []  # [label, colour, face] of each material drawn and each curve
     if scalar == "material" and material_names is not None and "material" in fields:
-        _add_materials(plotter, cloud, layers, material_names, water_ids)
+        legend = _add_materials(plotter, cloud, layers, material_names, water_ids)
     else:
         values = np.asarray(cloud.point_data[scalar])
         values = values if values.ndim == 1 else np.linalg.norm(values, axis=1)
@@ -72,11 +92,27 @@ def render_snapshot(fields, png_path, scalar="speed", title="", point_size=None,
     if domain is not None:
         box = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], 0, 0))
         plotter.add_mesh(box, style="wireframe", color="black")
+    for k, (points, colour, label) in enumerate(curves):  # each in front of those before it
+        _add_curve(plotter, points, colour, z=(4.0 + 0.5 * k) * spacing)
+        legend.append([label, colour, "line"])
+    if legend:
+        size = (0.26, 0.03 * len(legend) + 0.02) if curves else (0.14, 0.04 * len(legend) + 0.02)
+        plotter.add_legend(legend, bcolor="white", border=True, size=size, loc="upper right")
     if title:
         plotter.add_text(title, color="black", font_size=12)
     plotter.view_xy()
     plotter.enable_parallel_projection()
-    plotter.camera.tight(padding=0.06, view="xy")
+    if window is None:
+        plotter.camera.tight(padding=0.06, view="xy")
+    else:  # the window and its band, centred: its full height, its width 1/1.2 of the picture's
+        centre = 0.5 * (lo + hi)
+        plotter.camera.focal_point = (centre[0], centre[1], 0.0)
+        plotter.camera.position = (centre[0], centre[1], 10.0 * span)
+        plotter.camera.up = (0.0, 1.0, 0.0)
+        width_px, height_px = plotter.window_size
+        seen = max(float(hi[1] - lo[1]), 1.2 * float(hi[0] - lo[0]) * height_px / width_px)
+        plotter.camera.parallel_scale = 0.5 * seen
+        plotter.renderer.ResetCameraClippingRange()
     with atomic_path(png_path) as tmp:
         plotter.screenshot(str(tmp))
     plotter.close()
@@ -100,7 +136,7 @@ def _subset(cloud, mask, z):
 
 
 def _add_materials(plotter, cloud, layers, names, water_ids):
-    """One colour per material, named in a legend."""
+    """One colour per material; returns the legend's entries [name, colour, face]."""
     material = np.asarray(cloud.point_data["material"]).ravel().astype(int)
     waters = {int(w) for w in water_ids}
     soils = [k for k in range(len(names)) if k not in waters]
@@ -115,10 +151,15 @@ def _add_materials(plotter, cloud, layers, names, water_ids):
             plotter.add_mesh(_subset(cloud, sel, z), color=colours[k], point_size=layer_size,
                              render_points_as_spheres=True)  # fmt: skip
             if name not in [entry[0] for entry in legend]:
-                legend.append([name, colours[k]])
-    if legend:
-        plotter.add_legend(legend, bcolor="white", border=True, size=(0.14, 0.04 * len(legend) + 0.02),
-                           loc="upper right", face="circle")  # fmt: skip
+                legend.append([name, colours[k], "circle"])
+    return legend
+
+
+def _add_curve(plotter, points, colour, z):
+    """A polyline in the plane, lifted by z towards the camera (drawn over the particles)."""
+    p = np.asarray(points, float)
+    line = pv.lines_from_points(np.column_stack([p[:, 0], p[:, 1], np.full(len(p), z)]))
+    plotter.add_mesh(line, color=colour, line_width=4)
 
 
 def _add_body(plotter, vertices, z):

@@ -18,6 +18,9 @@ on the bed, 0.26 dx for one a spacing above it).
 Derived per output time, with z_s0 the surface of the first snapshot by the same rule:
   d(t) = max_x (z_s0(x) - z_s(x, t)) (the scour depth), x_deepest where it is reached,
   eroded area = integral of max(z_s0 - z_s, 0) dx, deposited area = integral of max(z_s - z_s0, 0) dx.
+
+Written per run (write_scour_outputs): scour.csv, scour_profiles.csv, scour.png (the surfaces and
+d(t)) and scour_hole.png (the last snapshot zoomed on the hole, with the surfaces it is read from).
 """
 
 from __future__ import annotations
@@ -61,6 +64,10 @@ def surface_profile(x_soil: np.ndarray, grid: ScourGrid, remaining=None) -> np.n
     reach = 2.0 * grid.h
     dz = grid.dx / SAMPLES_PER_DX
     z = grid.z_base + dz * np.arange(int(np.ceil((grid.z_top - grid.z_base) / dz)) + 1)
+    # above the highest particle's kernel support phi = 0: the scan stops at the first sample there
+    # (the same samples and crossing as the whole column, at a fraction of the cost)
+    if len(pts):
+        z = z[: int(np.searchsorted(z, pts[:, 1].max() + reach, side="right")) + 1]
     out = np.empty(len(grid.x_bins))
     for k, xc in enumerate(grid.x_bins):
         near = pts[np.abs(pts[:, 0] - xc) < reach]
@@ -157,9 +164,10 @@ def grid_for_scene(scene) -> ScourGrid | None:
     return ScourGrid.for_layer(lo[0], hi[0], lo[1], scene.domain.max[1], scene.scene.spacing, scene.h)
 
 
-def write_scour_outputs(out_dir, scene) -> Path | None:
-    """scour.csv (t, d, x_deepest, ...), scour_profiles.csv (z_s per bin and time) and scour.png
-    from the run's particles.h5; returns the CSV path, or None for a scene without soil."""
+def write_scour_outputs(out_dir, scene, hole_picture=True) -> Path | None:
+    """scour.csv (t, d, x_deepest, ...), scour_profiles.csv (z_s per bin and time), scour.png (the
+    profiles and d(t)) and, with hole_picture, scour_hole.png (the last snapshot zoomed on the hole,
+    render_hole) from the run's particles.h5; returns the CSV path, or None for a scene without soil."""
     from .hdf5_writer import read_series
 
     grid = grid_for_scene(scene)
@@ -167,6 +175,7 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
     if grid is None or not (out_dir / "particles.h5").exists():
         return None
     soil_ids = [k for k, m in enumerate(scene.materials.values()) if m.model == "soil"]
+    snapshots = read_series(out_dir / "particles.h5")
     series = scour_series(
         [
             (
@@ -178,7 +187,7 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
                     "eroded_share": f.get("eroded_share"),
                 },
             )  # fmt: skip
-            for t, f in read_series(out_dir / "particles.h5")
+            for t, f in snapshots
         ],
         soil_ids,
         grid,
@@ -196,7 +205,66 @@ def write_scour_outputs(out_dir, scene) -> Path | None:
         for k, x in enumerate(grid.x_bins):
             w.writerow([f"{x:.6g}"] + [f"{z[k]:.6g}" for _, z in series])
     plot_scour(series, grid, out_dir / "scour.png", title=scene.scene.name)
+    if hole_picture and series:
+        render_hole(snapshots[-1][1], series, grid, scene, out_dir / "scour_hole.png")
     return path
+
+
+def hole_window(series, grid: ScourGrid):
+    """The part of the (x, z) plane the hole picture shows, ((x_lo, z_lo), (x_hi, z_hi)): the bins
+    around the last time's deepest point where the bed dropped by more than a fifth of its depth,
+    10 spacings either side (the bins' range if there is no hole yet: d = 0), from 8 spacings below
+    the lowest surface there (not below the base) to 8 above the highest initial surface; widened to
+    twice its height or raised to a quarter of its width, so that it is neither a slit nor a strip."""
+    (m, z), z0 = series[-1], series[0][1]
+    dx, drop = grid.dx, series[0][1] - series[-1][1]
+    k = int(np.argmax(drop))
+    if m.depth > 0:
+        deep = drop > 0.2 * m.depth
+        i0, i1 = k, k
+        while i0 > 0 and deep[i0 - 1]:
+            i0 -= 1
+        while i1 < len(drop) - 1 and deep[i1 + 1]:
+            i1 += 1
+    else:
+        i0, i1 = 0, len(drop) - 1
+    x_lo, x_hi = grid.x_bins[i0] - 10 * dx, grid.x_bins[i1] + 10 * dx
+    z_lo = max(grid.z_base, float(z[i0 : i1 + 1].min()) - 8 * dx)
+    z_hi = float(z0[i0 : i1 + 1].max()) + 8 * dx
+    if x_hi - x_lo < 2 * (z_hi - z_lo):
+        grow = (2 * (z_hi - z_lo) - (x_hi - x_lo)) / 2
+        x_lo, x_hi = x_lo - grow, x_hi + grow
+    z_hi = max(z_hi, z_lo + (x_hi - x_lo) / 4)
+    return (x_lo, z_lo), (x_hi, z_hi)
+
+
+def render_hole(fields, series, grid: ScourGrid, scene, path):
+    """scour_hole.png: the last snapshot's particles in the hole's window (hole_window), coloured by
+    material (water drawn over the soil), with the bed's surface at the first and the last output time
+    (the measure's z_s, so the picture shows what d is read from) and the depth in the title."""
+    from .render import render_snapshot
+
+    (m, z), z0 = series[-1], series[0][1]
+    (x_lo, z_lo), (x_hi, z_hi) = window = hole_window(series, grid)
+    shown = (grid.x_bins >= x_lo) & (grid.x_bins <= x_hi)
+    names = list(scene.materials)
+    water_ids = [k for k, mat in enumerate(scene.materials.values()) if mat.model == "water"]
+    at = f"{1000 * m.depth:.1f} mm at x = {m.x_deepest:.3f} m" if m.depth > 0 else "0 (no hole yet)"
+    curves = [
+        (np.column_stack([grid.x_bins[shown], z0[shown]]), "black", f"bed at t = {series[0][0].t:.3g} s"),
+        (np.column_stack([grid.x_bins[shown], z[shown]]), "red", f"bed at t = {m.t:.3g} s"),
+    ]
+    return render_snapshot(
+        fields,
+        path,
+        scalar="material",
+        title=f"{scene.scene.name}  t = {m.t:.3g} s: scour depth d = {at}",
+        bodies=[b.vertices for b in scene.bodies],
+        material_names=names,
+        water_ids=water_ids,
+        window=window,
+        curves=curves,
+    )
 
 
 def plot_scour(series, grid, path, title=""):
@@ -214,8 +282,15 @@ def plot_scour(series, grid, path, title=""):
     ax1.set_title("surface: kernel soil fraction = 1/2")
     if len(series) <= 8:
         ax1.legend(fontsize=7)
+    elif len(series) > 1:  # too many times for a legend: a colour bar of t
+        bar = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(series[0][0].t, series[-1][0].t))
+        fig.colorbar(bar, ax=ax1, label="t (s)")
     ts = [m.t for m, _ in series]
     ax2.plot(ts, [1000 * m.depth for m, _ in series], "o-")
+    last = series[-1][0] if series else None
+    if last is not None:
+        ax2.text(0.97, 0.05, f"d({last.t:.3g} s) = {1000 * last.depth:.1f} mm at x = {last.x_deepest:.3f} m",
+                 transform=ax2.transAxes, ha="right", fontsize=9)  # fmt: skip
     ax2.set_xlabel("t (s)")
     ax2.set_ylabel("scour depth d (mm)")
     ax2.set_title(title)
