@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 MAIN_SCENE := scenes/scour_plunging_saturated.toml
 SCENE  ?= $(MAIN_SCENE)
 ifeq ($(SCENE),$(MAIN_SCENE))
-END    ?= 0.3
+END    ?= 0.2
 endif
 NPROC  := $(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)
 THREADS ?= $(if $(filter 1,$(NPROC)),1,2)

@@ -349,7 +349,8 @@ def test_still_water_stays_still_beside_a_convex_body_corner():
     g H / c^2, released at the sound speed c). The same pond without the step stays below 2e-4 m/s.
     Before each target saw only the images of its own region (edge strip or corner wedge), the
     pruning of pairs behind a mirror line left the corner's targets one-sided image sets: 0.056 m/s
-    at 0.01 s, 0.16 m/s at 0.1 s (the scour pond's 0.4 m/s current, docs/scour_study_history.md); with every
+    at 0.01 s, 0.16 m/s at 0.1 s (the scour pond's 0.4 m/s current, docs/history/scour_study_history.md);
+    with every
     pair kept (the wedge then sees the body three times over) 0.12-0.13 m/s at 0.05-0.1 s; with
     pairs kept wherever the target is in front of the image's edge line (no foot condition) 0.04 m/s
     at 0.1 s and 0.18 m/s at 0.2 s. Fixed: 0.004 m/s (measured 2026-12-02); with the bodies' images
@@ -380,7 +381,7 @@ def test_water_over_a_body_is_held_as_over_the_floor():
     crown's far end, beside the box wall). Before the bodies' images had the increment the crown's first
     row fell at 5.5 m/s^2 more than the floor's, and the water at the convex corner was pulled towards
     the crown at 1.2 m/s^2: the still pond's start current of 0.004-0.007 m/s
-    (docs/scour_study_history.md)."""
+    (docs/history/scour_study_history.md)."""
     import naive
 
     accelerations = {}

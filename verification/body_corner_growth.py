@@ -17,7 +17,8 @@ the crown), and how many particles within reach of the corner are in another reg
     python -m verification.body_corner_growth --end 1.0 --frozen
     python -m verification.body_corner_growth --end 3.0 --every 0.5 --h-over-dx 1.2
 
-Findings (docs/scour_study_history.md, "The bodies' convex corners"): the current is a lattice-scale zig-zag
+Findings (docs/history/scour_study_history.md, "The bodies' convex corners"): the current is a
+lattice-scale zig-zag
 that grows exponentially from the first 0.1-0.2 s, before any crossing, equally with frozen regions;
 the flat pond grows the same mode later (1.5 s at 5 mm), and neither grows at h = 1.2 dx.
 """

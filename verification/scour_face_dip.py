@@ -1,10 +1,12 @@
-"""The dip beside the caisson's face (docs/scour_study_history.md): the flow's, or a residue of the body
+"""The dip beside the caisson's face (docs/history/scour_study_history.md): the flow's, or a residue of the
+body
 images at the caisson's corner?
 
 In the saturated study runs a dip forms at x = 0.0175 m beside a bulge against the caisson's face
 (x = 0.0025 m); at q = 0.09 it is the deepest point at 2 s (0.64 mm). The first study's defect was
 there: the images of the overflow above the crown, mirrored across the crown's line or through its
-corner (0, 0.105), reached the pore water below the crown and compressed it (docs/scour_study_history.md,
+corner (0, 0.105), reached the pore water below the crown and compressed it
+(docs/history/scour_study_history.md,
 "What was wrong"); prune_behind_mirrors (solver/physics/bodies.py) removed the pairs that see an
 image from behind its mirror line. That rule drove a current at the convex corners in still water;
 corner9 replaced it by prune_to_own_region (each particle sees only the images of its own edge

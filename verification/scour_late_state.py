@@ -1,4 +1,5 @@
-"""The late state of a saturated scour run (docs/scour_study_history.md, "What the runs show"): the mound
+"""The late state of a saturated scour run (docs/history/scour_study_history.md, "What the runs show"): the
+mound
 against the end wall, the trough upstream of it, the pore water's drift and the soil's and pore water's
 speeds, from a study run's outputs in runs/scour_study/<case>/ (scour.csv, scour_profiles.csv, particles.h5).
 

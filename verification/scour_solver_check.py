@@ -1,6 +1,6 @@
 """A study case rerun on this checkout's solver into runs/scour_solver_check/ (not the study's case files),
 then its d(t) against the study's committed CSV: how far a solver change moves a run that was not rerun
-(docs/scour_study_history.md, "What was run").
+(docs/history/scour_study_history.md, "What was run").
 
     python -m verification.scour_solver_check dry 0.11 --end 1.0
 

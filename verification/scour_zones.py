@@ -35,7 +35,8 @@ pond's bed changes over x < 0.03 m only (0.16 mm bulge, 0.08 mm dip at 1 s, as l
 flowing runs' at 1 s at five of six q). So the face zone is the body's, not the nappe's.
 (corner9 fixed the corners: on its solver the pond's bed does not move and the saturated runs'
 bulge is gone; the zone is kept as it was so that d_nappe compares across solvers, and d_face is
-then mostly the first impact's ripple, docs/scour_study_history.md "The bodies' convex corners, fixed".)
+then mostly the first impact's ripple, docs/history/scour_study_history.md "The bodies' convex corners,
+fixed".)
 
 The zone columns are written into the study's copy of each run's scour.csv
 (cases/<case>_scour.csv: depth_nappe_m, x_deepest_nappe_m, depth_face_m), computed from the run's surface

@@ -36,8 +36,8 @@ a point mirror of the wedge), so every particle there sees the body filled once.
 failed: with every pair kept, a particle in the wedge saw the body three times over (both edges'
 images and the vertex's); dropping only the pairs whose target lies behind the image's mirror line
 (the fix of the overflow's images compressing the pore water under the caisson's crown,
-docs/scour_study_history.md) left one-sided image sets beside the corner, and still water there ran at up
-to 0.4 m/s (tests/test_bodies.py::test_still_water_stays_still_beside_a_convex_body_corner). The
+docs/history/scour_study_history.md) left one-sided image sets beside the corner, and still water there
+ran at up to 0.4 m/s (tests/test_bodies.py::test_still_water_stays_still_beside_a_convex_body_corner). The
 region rule still drops those crown pairs: pore water beside the face faces the face, not the crown.
 
 Repulsion backstop. As at the box walls (wall_repulsion.py), the image force vanishes as a particle

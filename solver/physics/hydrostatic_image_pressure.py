@@ -5,8 +5,8 @@ Body images (bodies.py) get it too: without it the water on a caisson's crown wa
 the mirror pressure (its first row fell at 5.5 m/s^2 more than a floor's first row), and round a
 convex corner the point images carried the pressure of their sources' height, not their own,
 pulling the wedge's water towards the crown at 1.2 m/s^2: the still pond's start current beside
-the corner (docs/scour_study_history.md, "The residual current (corner10)"). The soil's equilibrium image
-stress (equilibrium_soil_images.py) stays on the box walls' images: on an inclined edge its
+the corner (docs/history/scour_study_history.md, "The residual current (corner10)"). The soil's
+equilibrium image stress (equilibrium_soil_images.py) stays on the box walls' images: on an inclined edge its
 increment of the vertical stress is not free slip."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Where a step's time goes, phase by phase, at one and at two threads (Amdahl's ceiling).
 
-    NUMBA_NUM_THREADS=2 python benchmarks/step_phases.py --kind soil
+    NUMBA_NUM_THREADS=2 python benchmarks/studies/step_phases.py --kind soil
 
 Every term's run, every ghost/image refresh, the predictor, kick, drift, state checks and the
 neighbour rebuild are timed on their own (wall and CPU time; the fastest of --blocks blocks of
@@ -21,7 +21,7 @@ from collections import defaultdict
 
 import numba
 
-sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # benchmarks/
 
 import solver.simulation as simulation  # noqa: E402
 

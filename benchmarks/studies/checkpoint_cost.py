@@ -1,7 +1,7 @@
 """The cost of a checkpoint (README "Restart", docs/restart.md): bytes per particle and the time
 to write one and to read it back, against the time of a step, for a water and a soil scene.
 
-    nice -n 10 .venv/bin/python benchmarks/checkpoint_cost.py [--particles 200000] [--steps 20]
+    nice -n 10 .venv/bin/python benchmarks/studies/checkpoint_cost.py [--particles 200000] [--steps 20]
 
 Serial, one process, the machine's load printed with the figures (a timing on a shared machine
 means nothing without it). The checkpoint goes to a temporary directory on the same disk as the
@@ -25,7 +25,7 @@ from solver.plan import build_plan
 from solver.scene import load_scene
 from solver.simulation import Simulation
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENES = {
     # (file, area of the material in m^2 (2D), overrides)
     "water (dam break)": (ROOT / "scenes" / "dam_break_2d.toml", 0.05715 * 0.1143, []),

@@ -1,12 +1,12 @@
 """Does a new build step the 25k water benchmark scene to the same bits as an old build?
 
-    python benchmarks/water_identical.py OLD_CHECKOUT NEW_CHECKOUT [--steps 200] [--scheme seed]
+    python benchmarks/studies/water_identical.py OLD_CHECKOUT NEW_CHECKOUT [--steps 200] [--scheme seed]
 
 For a change meant to leave every floating-point operation as it was (an index type, a loop's
 layout): each build runs the disordered dam break of benchmarks/dam_break_setup.py for --steps
 steps in its own process, one Numba thread, and the positions, velocities, densities and pressures
 are compared by particle id. The verdict is "bit-identical" or the largest differences; for a
-change that rounds differently, benchmarks/soil_roundoff.py's one-ulp bound is the scale to use.
+change that rounds differently, benchmarks/studies/soil_roundoff.py's one-ulp bound is the scale to use.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Two builds' 25k water step timed call by call on one core: the side-by-side A/B for speed claims.
 
-    python benchmarks/ab_pinned.py OLD_CHECKOUT NEW_CHECKOUT [--pairs 3] [--rounds 100]
-    python benchmarks/ab_pinned.py . . --old-scheme seed --new-scheme default   # two presets, one build
+    python benchmarks/studies/ab_pinned.py OLD_CHECKOUT NEW_CHECKOUT [--pairs 3] [--rounds 100]
+    python benchmarks/studies/ab_pinned.py . . --old-scheme seed --new-scheme default # two presets, one build
 
 ab_step.py alternates whole processes, which on this host can land on different vCPUs, and the two
 vCPUs run at different speeds that change from minute to minute (docs/benchmarks.md: up to 37 %

@@ -1,9 +1,9 @@
 """Are a new build's soil results those of an old build, within round-off? Measured against the
 old build's own sensitivity to round-off.
 
-    python benchmarks/soil_roundoff.py OLD_CHECKOUT NEW_CHECKOUT --case bench --steps 200
-    python benchmarks/soil_roundoff.py OLD_CHECKOUT NEW_CHECKOUT --case collapse --resolution 20
-    python benchmarks/soil_roundoff.py OLD NEW --case saturated --formulation seed --steps 300
+    python benchmarks/studies/soil_roundoff.py OLD_CHECKOUT NEW_CHECKOUT --case bench --steps 200
+    python benchmarks/studies/soil_roundoff.py OLD_CHECKOUT NEW_CHECKOUT --case collapse --resolution 20
+    python benchmarks/studies/soil_roundoff.py OLD NEW --case saturated --formulation seed --steps 300
 
 A speed-up that sums in another order, or rounds one product differently, changes every result by
 round-off, and a particle flow amplifies round-off (a disordered or plastic flow is chaotic), so

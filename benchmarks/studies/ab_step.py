@@ -1,7 +1,7 @@
 """Back-to-back A/B timing of one step in two checkouts, for speed claims on a noisy host.
 
-    python benchmarks/ab_step.py OLD_CHECKOUT NEW_CHECKOUT --kind soil --rounds 4
-    python benchmarks/ab_step.py . . --kind water --old-scheme seed    # two numerics presets, one build
+    python benchmarks/studies/ab_step.py OLD_CHECKOUT NEW_CHECKOUT --kind soil --rounds 4
+    python benchmarks/studies/ab_step.py . . --kind water --old-scheme seed  # two presets, one build
 
 Each round runs the benchmark scene of each checkout in its own process (its own `solver`),
 alternating, one Numba thread (--threads), and reports the CPU time per step of the fastest of 15
@@ -12,7 +12,7 @@ seepage terms alone, run on the saturated state; time per call of all of them). 
 than wall time, and the two builds alternated, because this 2-core host's speed varies 2x within
 an hour: the ratio new/old of one round is the figure to quote, with the load printed beside it.
 
-    python benchmarks/ab_step.py OLD NEW --kind coupling --call-by-call --pairs 3 --calls 200
+    python benchmarks/studies/ab_step.py OLD NEW --kind coupling --call-by-call --pairs 3 --calls 200
 
 --call-by-call: the two builds in two long-lived processes pinned to one core (--cpu), taking
 turns call by call (one timed call of the old build, one of the new, a few milliseconds apart, as
