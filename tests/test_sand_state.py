@@ -20,8 +20,8 @@ K, G = 1.67e7, 7.7e6
 
 
 def test_index_against_twin_and_bolton(rng):
-    """I_R against the twin over states from e_min to e_max and p' from 0 to 10 MPa; by hand, Bolton's own
-    I_R where his implied line meets the critical line (the two differ only through the line)."""
+    """I_R against the twin over states from e_min to e_max and p' from 0 to 10 MPa; by hand, its sign about
+    the critical line, Bolton's clip, and the plane-strain angles of I_R = 1."""
     for _ in range(500):
         e, p = rng.uniform(0.6, 1.0), 10 ** rng.uniform(-1, 7) * rng.choice([0.0, 1.0], p=[0.05, 0.95])
         assert relative_dilatancy_index(e, p, *CSL) == pytest.approx(nv.bolton_index(e, p, *CSL), abs=1e-12)

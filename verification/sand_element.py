@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from solver.materials import YieldModel
+from solver.physics.sand_state import PLANE_STRAIN_FRICTION
 from solver.physics.soil_stress import soil_stress_state
 from solver.sand_state import SandState, critical_void_ratio
 
@@ -239,17 +240,14 @@ def run_tests(resolution, with_state=True):
     )
 
 
-def on_the_line(state, p, sand=TOYOURA):
+def on_the_line(p, sand=TOYOURA):
     """|psi_s| whose I_R moves phi by Bolton's 1 deg margin of phi_cv ("can readily be determined
     experimentally within a margin of about 1 deg", Bolton 1986): closer than that is on the line."""
     return (
-        (1.0 / PLANE_STRAIN)
+        (1.0 / PLANE_STRAIN_FRICTION)
         * (sand.max_void_ratio - sand.min_void_ratio)
         / (sand.bolton_q - math.log(p * 1e-3))
     )
-
-
-PLANE_STRAIN = 5.0  # deg per unit I_R (Bolton 1986)
 
 
 def checks(r):
@@ -268,7 +266,7 @@ def checks(r):
         out.append(
             Check(
                 f"drained {name}: |psi_s| at the end / on-the-line bound",
-                abs(path.state[-1]) / on_the_line(path.state[-1], path.p[-1]),
+                abs(path.state[-1]) / on_the_line(path.p[-1]),
                 1.0,
                 "phi_cv's 1 deg margin (Bolton 1986) as a void ratio",
             )
